@@ -1,0 +1,26 @@
+#pragma once
+
+namespace objmap {
+
+/// Axis-aligned box in pixel coordinates (x right, y down), inclusive of x_min/y_min.
+struct BoundingBox2D {
+  float x_min = 0.f;
+  float y_min = 0.f;
+  float x_max = 0.f;
+  float y_max = 0.f;
+
+  [[nodiscard]] float Width() const { return x_max - x_min; }
+  [[nodiscard]] float Height() const { return y_max - y_min; }
+  [[nodiscard]] float Area() const {
+    return Width() > 0.f && Height() > 0.f ? Width() * Height() : 0.f;
+  }
+};
+
+/// One object detection on a colour image.
+struct Detection {
+  BoundingBox2D box;  ///< in colour-image pixels
+  int class_id = -1;  ///< COCO class index 0..79 (see coco_classes.h)
+  float score = 0.f;  ///< detector confidence in [0, 1]
+};
+
+}  // namespace objmap
