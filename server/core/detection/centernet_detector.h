@@ -1,0 +1,31 @@
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "detection/detector.h"
+
+namespace objmap {
+
+/// CenterNet (MobileNetV3 backbone, 80 COCO classes) run through OpenCV DNN.
+struct CenterNetConfig {
+  /// Frozen TensorFlow GraphDef made by scripts/convert_centernet.py.
+  std::string model_path = "models/centernet_coco.pb";
+  /// Peaks below this score are dropped. Low on purpose: multi-view accumulation in the object
+  /// map separates real objects from one-off mistakes (paper Sec. III-D).
+  float score_threshold = 0.15f;
+  /// Network input side in pixels (the model was trained at 512).
+  int input_size = 512;
+  /// Upper bound on detections per image, best first.
+  int max_detections = 100;
+  /// OpenCV DNN threads; 0 keeps OpenCV's default.
+  int num_threads = 0;
+
+  [[nodiscard]] bool IsValid(std::string* why) const;
+};
+
+/// Loads the network; returns nullptr and a reason naming the file when it cannot.
+[[nodiscard]] std::unique_ptr<Detector> MakeCenterNetDetector(const CenterNetConfig& config,
+                                                              std::string* why);
+
+}  // namespace objmap
