@@ -1,8 +1,8 @@
 #pragma once
 
 #include <Eigen/Core>
-#include <cmath>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
