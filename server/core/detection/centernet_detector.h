@@ -18,8 +18,10 @@ struct CenterNetConfig {
   int input_size = 512;
   /// Upper bound on detections per image, best first.
   int max_detections = 100;
-  /// OpenCV DNN threads; 0 keeps OpenCV's default.
+  /// OpenCV DNN threads; 0 keeps OpenCV's default. OpenCV applies this process-wide.
   int num_threads = 0;
+  /// Same-class boxes overlapping a better one by more than this IoU are dropped; 1 disables.
+  float nms_iou = 0.6f;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
