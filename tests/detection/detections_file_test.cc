@@ -1,6 +1,7 @@
 #include "detection/detections_file.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>

@@ -49,6 +49,7 @@ CenterNetDecodeParams MakeDecodeParams(const CenterNetConfig& config, const Colo
   return params;
 }
 
+/// Not thread-safe: cv::dnn::Net keeps per-forward state, so use one instance per thread.
 class CenterNetDetector final : public Detector {
  public:
   CenterNetDetector(CenterNetConfig config, cv::dnn::Net net)
@@ -75,6 +76,7 @@ bool CenterNetDetector::Detect(const RgbdFrame& frame, std::vector<Detection>* d
   }
   // The network takes RGB 0-255 without normalisation; a plain (non letter-boxed) resize is what
   // the TF.js model was run with.
+  // Read-only view of the caller's pixels; resize writes into its own buffer.
   const cv::Mat rgb(image.height, image.width, CV_8UC3,
                     const_cast<std::uint8_t*>(image.rgb.data()));
   cv::Mat resized;
