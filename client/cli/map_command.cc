@@ -1,0 +1,212 @@
+// `objmap map`: a recorded RGB-D sequence in, an object map out.
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+
+#include "arguments.h"
+#include "commands.h"
+#include "detection/centernet_detector.h"
+#include "detection/detections_file.h"
+#include "mapper/map_export.h"
+#include "pipeline/sequence_runner.h"
+#include "types/coco_classes.h"
+
+namespace objmap::cli {
+namespace {
+
+constexpr char kMapUsage[] =
+    "usage: objmap map <dataset> --out <dir> [options]\n"
+    "  <dataset>                 7-Scenes folder (frame-NNNNNN.*) or TUM RGB-D folder\n"
+    "  --out DIR                 output folder: map.bt, objects.json, objects/*.ply, timings.json\n"
+    "  --model FILE              CenterNet GraphDef (default: models/centernet_coco.pb)\n"
+    "  --detections FILE         take detections from a JSON file instead of the network\n"
+    "  --save-detections FILE    write the detections used, to replay a run\n"
+    "  --score-threshold S       detector peak threshold (default 0.15)\n"
+    "  --first-frame N           first frame index (default 0)\n"
+    "  --max-frames N            number of frames to read (default: all)\n"
+    "  --min-translation M       keyframe after this much motion, metres (default 0.10)\n"
+    "  --min-rotation DEG        keyframe after this much rotation, degrees (default 10)\n"
+    "  --every-frame             every frame is a keyframe\n"
+    "  --min-observations N      inventory: keyframes an object needs (default 3)\n"
+    "  --min-confidence C        inventory: confidence an object needs (default 0.2)\n"
+    "  --stop-on-error           stop at the first bad frame instead of skipping it\n";
+
+// Wraps a detector and keeps what it found per frame, for --save-detections.
+class RecordingDetector : public Detector {
+ public:
+  explicit RecordingDetector(std::unique_ptr<Detector> inner) : inner_(std::move(inner)) {}
+  bool Detect(const RgbdFrame& frame, std::vector<Detection>* detections,
+              std::string* why) override {
+    if (!inner_->Detect(frame, detections, why)) return false;
+    recorded_[frame.name] = *detections;
+    return true;
+  }
+  std::string Name() const override { return inner_->Name(); }
+  const DetectionsByFrame& recorded() const { return recorded_; }
+
+ private:
+  std::unique_ptr<Detector> inner_;
+  DetectionsByFrame recorded_;
+};
+
+std::unique_ptr<Detector> MakeDetector(Arguments& args, std::string* why) {
+  if (args.Has("--detections")) {
+    DetectionsFileConfig config;
+    config.path = args.Get("--detections", "");
+    return MakeDetectionsFileDetector(config, why);
+  }
+  CenterNetConfig config;
+  config.model_path = args.Get("--model", OBJMAP_DEFAULT_MODEL_PATH);
+  config.score_threshold = static_cast<float>(args.GetNumber("--score-threshold", 0.15));
+  if (!std::filesystem::exists(config.model_path)) {
+    *why = "detector model " + config.model_path +
+           " not found: run `bash scripts/setup.sh` (fetches and converts it), or pass --model "
+           "FILE or --detections FILE";
+    return nullptr;
+  }
+  return MakeCenterNetDetector(config, why);
+}
+
+void PrintProgress(std::size_t done, std::size_t total, std::size_t keyframes) {
+  constexpr int kWidth = 40;
+  const int filled = static_cast<int>(kWidth * done / std::max<std::size_t>(total, 1));
+  std::fprintf(stderr, "\r[%s%s] %zu/%zu frames, %zu keyframes", std::string(filled, '#').c_str(),
+               std::string(kWidth - filled, '.').c_str(), done, total, keyframes);
+  if (done == total) std::fprintf(stderr, "\n");
+}
+
+struct StageMedians {
+  double detection_ms, segmentation_ms, association_ms, occupancy_ms, total_ms;
+};
+
+StageMedians Medians(const SequenceRunReport& report) {
+  std::vector<double> det, seg, assoc, occ, total;
+  for (const KeyframeReport& k : report.keyframes) {
+    det.push_back(k.detection_ms);
+    seg.push_back(k.result.timings.segmentation_ms);
+    assoc.push_back(k.result.timings.association_ms);
+    occ.push_back(k.result.timings.occupancy_ms);
+    total.push_back(k.detection_ms + k.result.timings.segmentation_ms +
+                    k.result.timings.association_ms + k.result.timings.occupancy_ms);
+  }
+  return {Median(det), Median(seg), Median(assoc), Median(occ), Median(total)};
+}
+
+void PrintSummary(const Mapper& mapper, const SequenceRunReport& report, double wall_s) {
+  std::cout << "\nkeyframes: " << report.keyframes.size() << " of " << report.frames_read
+            << " frames read; skipped frames: " << report.skipped.size() << "\n";
+  std::cout << "objects in the map: " << mapper.objects().size()
+            << ", in the inventory (>= " << mapper.config().inventory.min_observations
+            << " observations, confidence >= " << mapper.config().inventory.min_confidence
+            << "): " << mapper.ConfirmedObjects().size() << "\n\n";
+  std::cout << std::left << std::setw(16) << "class" << std::right << std::setw(6) << "count"
+            << std::setw(17) << "mean confidence"
+            << "\n";
+  for (const InventoryEntry& entry : mapper.Inventory()) {
+    std::cout << std::left << std::setw(16) << CocoClassName(entry.class_id) << std::right
+              << std::setw(6) << entry.count << std::setw(17) << std::fixed << std::setprecision(3)
+              << entry.mean_confidence << "\n";
+  }
+  const StageMedians m = Medians(report);
+  std::cout << "\nmedian ms per keyframe: detection " << std::setprecision(1) << m.detection_ms
+            << ", segmentation " << m.segmentation_ms << ", association " << m.association_ms
+            << ", occupancy " << m.occupancy_ms << ", total " << m.total_ms << "\n";
+  std::cout << "wall time: " << std::setprecision(1) << wall_s << " s\n";
+}
+
+bool WriteTimings(const SequenceRunReport& report, const std::string& path, std::string* why) {
+  std::ofstream out(path);
+  out << "frame,detection_ms,segmentation_ms,association_ms,occupancy_ms,detections,used\n";
+  for (const KeyframeReport& k : report.keyframes) {
+    out << k.frame_index << "," << k.detection_ms << "," << k.result.timings.segmentation_ms << ","
+        << k.result.timings.association_ms << "," << k.result.timings.occupancy_ms << ","
+        << k.detections << "," << k.result.detections_used << "\n";
+  }
+  if (!out) *why = path + ": write failed";
+  return static_cast<bool>(out);
+}
+
+MapperConfig MapperConfigFrom(Arguments& args) {
+  MapperConfig config;
+  config.inventory.min_observations =
+      static_cast<int>(args.GetNumber("--min-observations", config.inventory.min_observations));
+  config.inventory.min_confidence =
+      static_cast<float>(args.GetNumber("--min-confidence", config.inventory.min_confidence));
+  return config;
+}
+
+SequenceRunConfig RunConfigFrom(Arguments& args) {
+  SequenceRunConfig config;
+  config.first_frame = static_cast<std::size_t>(args.GetNumber("--first-frame", 0));
+  config.max_frames = static_cast<std::size_t>(args.GetNumber("--max-frames", 0));
+  config.keyframes.min_translation_m =
+      args.GetNumber("--min-translation", config.keyframes.min_translation_m);
+  config.keyframes.min_rotation_deg =
+      args.GetNumber("--min-rotation", config.keyframes.min_rotation_deg);
+  config.keyframes.every_frame = args.Has("--every-frame");
+  config.stop_on_bad_frame = args.Has("--stop-on-error");
+  return config;
+}
+
+int Fail(const std::string& message) {
+  std::cerr << "objmap map: " << message << "\n";
+  return 1;
+}
+
+}  // namespace
+
+int RunMapCommand(int argc, char** argv) {
+  Arguments args(argc, argv,
+                 {"--out", "--model", "--detections", "--save-detections", "--score-threshold",
+                  "--first-frame", "--max-frames", "--min-translation", "--min-rotation",
+                  "--min-observations", "--min-confidence"},
+                 {"--every-frame", "--stop-on-error", "--help"});
+  if (args.Has("--help")) {
+    std::cout << kMapUsage;
+    return 0;
+  }
+  const MapperConfig mapper_config = MapperConfigFrom(args);
+  const SequenceRunConfig run_config = RunConfigFrom(args);
+  if (!args.error().empty() || args.positional().size() != 1 || !args.Has("--out")) {
+    std::cerr << (args.error().empty() ? "" : args.error() + "\n") << kMapUsage;
+    return 2;
+  }
+  std::string why;
+  if (!mapper_config.IsValid(&why) || !run_config.IsValid(&why)) return Fail(why);
+  auto reader = OpenSequence(args.positional()[0], &why);
+  if (!reader) return Fail(why);
+  auto detector = MakeDetector(args, &why);
+  if (!detector) return Fail(why);
+  auto recorder = std::make_unique<RecordingDetector>(std::move(detector));
+  std::cout << "mapping " << reader->Describe() << " with the " << recorder->Name()
+            << " detector\n";
+
+  Mapper mapper(mapper_config);
+  SequenceRunReport report;
+  const auto start = std::chrono::steady_clock::now();
+  const bool completed =
+      RunSequence(*reader, recorder.get(), &mapper, run_config, PrintProgress, &report, &why);
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  for (const std::string& message : report.skipped) std::cerr << "skipped " << message << "\n";
+  if (!completed) std::cerr << "\nobjmap map: stopped at " << why << "\n";
+  PrintSummary(mapper, report, wall_s);
+
+  const std::string out_dir = args.Get("--out", "");
+  if (!WriteMapOutputs(mapper, out_dir, &why) ||
+      !WriteTimings(report, out_dir + "/timings.csv", &why)) {
+    return Fail(why);
+  }
+  if (args.Has("--save-detections") &&
+      !WriteDetectionsFile(args.Get("--save-detections", ""), recorder->recorded(), &why)) {
+    return Fail(why);
+  }
+  std::cout << "wrote " << out_dir << "/map.bt, objects.json, objects/*.ply, timings.csv\n";
+  return completed ? 0 : 1;
+}
+
+}  // namespace objmap::cli

@@ -1,0 +1,52 @@
+#!/usr/bin/env bash
+# Everything objmap needs on a fresh Debian 12 machine, idempotent and quick when already done:
+#   1. Debian packages (apt-get, only when something is missing),
+#   2. the COCO detector model (scripts/fetch_model.sh),
+#   3. configure and build in build/ (CMake + Ninja, Release).
+# Environment: OBJMAP_BUILD_DIR (default build), OBJMAP_JOBS (default: number of cores).
+set -euo pipefail
+
+readonly ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+readonly BUILD_DIR="${OBJMAP_BUILD_DIR:-${ROOT}/build}"
+readonly JOBS="${OBJMAP_JOBS:-$(nproc)}"
+
+# Build tools, the design card's libraries that the code uses, test frameworks, and npm for the
+# detector model package.
+readonly PACKAGES=(
+  build-essential cmake ninja-build pkg-config git
+  libeigen3-dev liboctomap-dev libpcl-dev libopencv-dev nlohmann-json3-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  python3 npm
+)
+
+install_packages() {
+  local missing=()
+  for package in "${PACKAGES[@]}"; do
+    dpkg-query -W -f='${Status}' "${package}" 2>/dev/null | grep -q "install ok installed" ||
+      missing+=("${package}")
+  done
+  if ((${#missing[@]} == 0)); then
+    echo "setup: Debian packages present"
+    return
+  fi
+  local sudo=""
+  if [[ "$(id -u)" -ne 0 ]]; then sudo="sudo"; fi
+  echo "setup: installing ${missing[*]}"
+  ${sudo} apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive ${sudo} apt-get install -y -qq --no-install-recommends \
+    "${missing[@]}" >/dev/null
+}
+
+build() {
+  # /usr/bin/python3, not a pyenv shim that may be first on PATH.
+  if [[ ! -f "${BUILD_DIR}/build.ninja" ]]; then
+    cmake -S "${ROOT}" -B "${BUILD_DIR}" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+      -DPython3_EXECUTABLE=/usr/bin/python3 -DPYTHON_EXECUTABLE=/usr/bin/python3
+  fi
+  cmake --build "${BUILD_DIR}" -j "${JOBS}"
+}
+
+install_packages
+bash "${ROOT}/scripts/fetch_model.sh"
+build
+echo "setup: objmap built in ${BUILD_DIR}"

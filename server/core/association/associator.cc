@@ -1,0 +1,166 @@
+#include "association/associator.h"
+
+#include <pcl/kdtree/kdtree_flann.h>
+#include <pcl/point_types.h>
+
+#include <algorithm>
+#include <unordered_map>
+
+namespace objmap {
+namespace {
+
+struct CachedTree {
+  std::uint64_t version = 0;
+  pcl::KdTreeFLANN<pcl::PointXYZ> tree;
+  bool empty = true;
+};
+
+Eigen::Vector3f Centroid(const std::vector<Eigen::Vector3f>& points) {
+  Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+  for (const Eigen::Vector3f& p : points) sum += p;
+  return points.empty() ? sum : Eigen::Vector3f(sum / static_cast<float>(points.size()));
+}
+
+float BoundingRadius(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& centre) {
+  float radius_sq = 0.f;
+  for (const Eigen::Vector3f& p : points)
+    radius_sq = std::max(radius_sq, (p - centre).squaredNorm());
+  return std::sqrt(radius_sq);
+}
+
+float ObjectRadius(const MapObject& object) {
+  return std::max((object.max_W - object.centroid_W).norm(),
+                  (object.min_W - object.centroid_W).norm());
+}
+
+}  // namespace
+
+struct Associator::TreeCache {
+  std::unordered_map<ObjectId, CachedTree> trees;
+
+  CachedTree& TreeOf(const MapObject& object) {
+    CachedTree& cached = trees[object.id];
+    if (cached.version == object.version && !cached.empty) return cached;
+    auto cloud = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
+    for (const Eigen::Vector3f& p : object.model_W.Points().points) {
+      cloud->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
+    }
+    cached.version = object.version;
+    cached.empty = cloud->empty();
+    if (!cached.empty) cached.tree.setInputCloud(cloud);
+    return cached;
+  }
+};
+
+bool AssociationConfig::IsValid(std::string* why) const {
+  if (!(candidate_margin_m >= 0.f) || !(match_distance_m > 0.f)) {
+    *why = "AssociationConfig: candidate_margin_m must be >= 0 and match_distance_m > 0";
+    return false;
+  }
+  if (!(min_match_fraction > 0.f && min_match_fraction <= 1.f)) {
+    *why = "AssociationConfig.min_match_fraction must be in (0, 1]";
+    return false;
+  }
+  return true;
+}
+
+Associator::Associator(const AssociationConfig& config)
+    : config_(config), trees_(std::make_unique<TreeCache>()) {}
+Associator::~Associator() = default;
+Associator::Associator(Associator&&) noexcept = default;
+Associator& Associator::operator=(Associator&&) noexcept = default;
+
+float Associator::MatchFraction(const MapObject& object,
+                                const std::vector<Eigen::Vector3f>& points_W) {
+  if (points_W.empty()) return 0.f;
+  CachedTree& cached = trees_->TreeOf(object);
+  if (cached.empty) return 0.f;
+  const float max_sq = config_.match_distance_m * config_.match_distance_m;
+  std::vector<int> index(1);
+  std::vector<float> distance_sq(1);
+  std::size_t matched = 0;
+  for (const Eigen::Vector3f& p : points_W) {
+    if (cached.tree.nearestKSearch(pcl::PointXYZ(p.x(), p.y(), p.z()), 1, index, distance_sq) > 0 &&
+        distance_sq[0] <= max_sq) {
+      ++matched;
+    }
+  }
+  return static_cast<float>(matched) / static_cast<float>(points_W.size());
+}
+
+std::vector<ObjectId> Associator::Candidates(const ObjectMap& map,
+                                             const std::vector<Eigen::Vector3f>& points_W) const {
+  std::vector<ObjectId> candidates;
+  if (points_W.empty()) return candidates;
+  const Eigen::Vector3f centroid = Centroid(points_W);
+  const float radius = BoundingRadius(points_W, centroid);
+  for (const auto& [id, object] : map.objects()) {
+    const float reach = radius + ObjectRadius(object) + config_.candidate_margin_m;
+    if ((object.centroid_W - centroid).squaredNorm() <= reach * reach) candidates.push_back(id);
+  }
+  return candidates;
+}
+
+std::vector<std::optional<ObjectId>> Associator::AssignKeyframe(
+    const ObjectMap& map, const std::vector<SegmentToAssociate>& segments) {
+  struct Pair {
+    float fraction;
+    std::size_t segment;
+    ObjectId object;
+  };
+  std::vector<Pair> pairs;
+  for (std::size_t s = 0; s < segments.size(); ++s) {
+    for (ObjectId id : Candidates(map, segments[s].points_W)) {
+      const float fraction = MatchFraction(*map.Find(id), segments[s].points_W);
+      if (fraction >= config_.min_match_fraction) pairs.push_back({fraction, s, id});
+    }
+  }
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
+    return a.fraction != b.fraction ? a.fraction > b.fraction : a.segment < b.segment;
+  });
+  std::vector<std::optional<ObjectId>> assignment(segments.size());
+  std::vector<ObjectId> taken;
+  for (const Pair& pair : pairs) {
+    if (assignment[pair.segment]) continue;
+    if (std::find(taken.begin(), taken.end(), pair.object) != taken.end()) continue;
+    assignment[pair.segment] = pair.object;
+    taken.push_back(pair.object);
+  }
+  return assignment;
+}
+
+std::vector<std::pair<ObjectId, ObjectId>> Associator::FindDuplicates(
+    const ObjectMap& map, const std::vector<ObjectId>& ids) {
+  std::vector<std::pair<ObjectId, ObjectId>> duplicates;
+  std::vector<ObjectId> absorbed;
+  for (ObjectId id : ids) {
+    const MapObject* object = map.Find(id);
+    if (object == nullptr || object->model_W.empty()) continue;
+    if (std::find(absorbed.begin(), absorbed.end(), id) != absorbed.end()) continue;
+    const std::vector<Eigen::Vector3f> points = object->model_W.Points().points;
+    for (ObjectId other_id : Candidates(map, points)) {
+      const MapObject& other = *map.Find(other_id);
+      if (other_id == id || other.Label() != object->Label()) continue;
+      if (std::find(absorbed.begin(), absorbed.end(), other_id) != absorbed.end()) continue;
+      // Test the smaller model against the larger one: a partial view of an object is a
+      // duplicate of the whole even though the whole is not a duplicate of the part.
+      const bool object_smaller = object->model_W.size() <= other.model_W.size();
+      const MapObject& small = object_smaller ? *object : other;
+      const MapObject& large = object_smaller ? other : *object;
+      if (MatchFraction(large, small.model_W.Points().points) < config_.min_match_fraction)
+        continue;
+      duplicates.emplace_back(large.id, small.id);
+      absorbed.push_back(small.id);
+      if (object_smaller) break;
+    }
+  }
+  return duplicates;
+}
+
+void Associator::ForgetMissing(const ObjectMap& map) {
+  for (auto it = trees_->trees.begin(); it != trees_->trees.end();) {
+    it = map.Find(it->first) == nullptr ? trees_->trees.erase(it) : std::next(it);
+  }
+}
+
+}  // namespace objmap

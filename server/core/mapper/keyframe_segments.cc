@@ -1,0 +1,127 @@
+#include "mapper/keyframe_segments.h"
+
+#include <algorithm>
+#include <numeric>
+#include <unordered_set>
+
+namespace objmap {
+namespace {
+
+bool IsSurfaceClass(int class_id, const MapperConfig& config) {
+  return std::find(config.surface_classes.begin(), config.surface_classes.end(), class_id) !=
+         config.surface_classes.end();
+}
+
+bool Inside(const BoundingBox2D& box, int u, int v) {
+  return u >= box.x_min && u <= box.x_max && v >= box.y_min && v <= box.y_max;
+}
+
+// A table top is a supporting plane, so SelectDetectionPixels never returns it. Surface classes
+// take the plane segment with most pixels in the box, provided most of that plane lies in the box
+// (the floor or a wall seen between the table legs extends far beyond it).
+std::vector<int> SurfacePlanePixels(const SegmentationResult& segmentation,
+                                    const BoundingBox2D& box) {
+  std::vector<int> inside(segmentation.num_segments, 0);
+  std::vector<int> total(segmentation.num_segments, 0);
+  for (int v = 0; v < segmentation.height; ++v) {
+    for (int u = 0; u < segmentation.width; ++u) {
+      const int label = segmentation.labels[v * segmentation.width + u];
+      if (label < 0 || !segmentation.segment_is_plane[label]) continue;
+      ++total[label];
+      if (Inside(box, u, v)) ++inside[label];
+    }
+  }
+  int best = -1;
+  for (int s = 0; s < segmentation.num_segments; ++s) {
+    if (inside[s] * 2 < total[s]) continue;
+    if (best < 0 || inside[s] > inside[best]) best = s;
+  }
+  std::vector<int> pixels;
+  if (best < 0) return pixels;
+  for (int i = 0; i < static_cast<int>(segmentation.labels.size()); ++i) {
+    if (segmentation.labels[i] == best) pixels.push_back(i);
+  }
+  return pixels;
+}
+
+ColoredPoints SegmentPoints(const OrganizedCloud& cloud_C, const std::vector<int>& pixels,
+                            float voxel_size_m) {
+  ColoredPoints points;
+  points.points.reserve(pixels.size());
+  for (int i : pixels) {
+    if (!cloud_C.IsValid(i)) continue;
+    points.points.push_back(cloud_C.points_C[i]);
+    if (!cloud_C.rgb.empty()) points.colors.push_back(cloud_C.rgb[i]);
+  }
+  return VoxelDownsample(points, voxel_size_m);
+}
+
+// Fraction of `pixels` already claimed by `claimed`.
+float ClaimedFraction(const std::vector<int>& pixels, const std::unordered_set<int>& claimed) {
+  if (pixels.empty()) return 0.f;
+  const auto hits =
+      std::count_if(pixels.begin(), pixels.end(), [&](int i) { return claimed.count(i) > 0; });
+  return static_cast<float>(hits) / static_cast<float>(pixels.size());
+}
+
+void AddClassScore(ObjectObservation* observation, int class_id, float score) {
+  for (auto& [existing_class, existing_score] : observation->class_scores) {
+    if (existing_class == class_id) {
+      existing_score = std::max(existing_score, score);  // the same object detected twice
+      return;
+    }
+  }
+  observation->class_scores.emplace_back(class_id, score);
+}
+
+}  // namespace
+
+BoundingBox2D ToDepthPixels(const BoundingBox2D& box, const ColorImage& color,
+                            const DepthImage& depth) {
+  if (color.empty() || (color.width == depth.width && color.height == depth.height)) return box;
+  const float sx = static_cast<float>(depth.width) / color.width;
+  const float sy = static_cast<float>(depth.height) / color.height;
+  return {box.x_min * sx, box.y_min * sy, box.x_max * sx, box.y_max * sy};
+}
+
+std::vector<SegmentedDetection> SegmentDetections(
+    const RgbdFrame& frame, const OrganizedCloud& cloud_C, const SegmentationResult& segmentation,
+    const std::vector<Detection>& detections, KeyframeId keyframe_id, const MapperConfig& config) {
+  std::vector<int> order(detections.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return detections[a].score > detections[b].score; });
+  std::vector<SegmentedDetection> segmented;
+  std::vector<std::unordered_set<int>> claimed;
+  for (int d : order) {
+    const Detection& detection = detections[d];
+    if (detection.score < config.min_detection_score || detection.box.Area() <= 0.f) continue;
+    const BoundingBox2D box = ToDepthPixels(detection.box, frame.color, frame.depth);
+    std::vector<int> pixels =
+        SelectDetectionPixels(segmentation, cloud_C, box, config.detection_segment);
+    if (pixels.empty() && IsSurfaceClass(detection.class_id, config)) {
+      pixels = SurfacePlanePixels(segmentation, box);
+    }
+    if (pixels.empty()) continue;
+    bool fused = false;
+    for (std::size_t k = 0; k < segmented.size() && !fused; ++k) {
+      if (ClaimedFraction(pixels, claimed[k]) >= 0.5f) {
+        AddClassScore(&segmented[k].observation, detection.class_id, detection.score);
+        fused = true;
+      }
+    }
+    if (fused) continue;
+    SegmentedDetection entry;
+    entry.observation.segment_C = SegmentPoints(cloud_C, pixels, config.objects.model_voxel_size_m);
+    if (static_cast<int>(entry.observation.segment_C.size()) < config.min_segment_points) continue;
+    entry.observation.keyframe_id = keyframe_id;
+    entry.observation.box = detection.box;
+    entry.observation.class_scores = {{detection.class_id, detection.score}};
+    claimed.emplace_back(pixels.begin(), pixels.end());
+    entry.pixels = std::move(pixels);
+    segmented.push_back(std::move(entry));
+  }
+  return segmented;
+}
+
+}  // namespace objmap

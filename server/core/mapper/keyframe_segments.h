@@ -1,0 +1,31 @@
+#pragma once
+// Turning one keyframe's detections into object observations (paper Sec. III-B, last step):
+// each detection box picks its 3D segment; detections that pick the same segment are fused.
+
+#include <vector>
+
+#include "mapper/mapper.h"
+#include "objects/object_map.h"
+#include "segmentation/segmenter.h"
+#include "types/organized_cloud.h"
+
+namespace objmap {
+
+/// One detection with its segment, ready for association.
+struct SegmentedDetection {
+  ObjectObservation observation;  ///< segment in the camera frame, model resolution
+  std::vector<int> pixels;        ///< indices into the organized cloud
+};
+
+/// Scales a colour-image box into depth-image pixels.
+[[nodiscard]] BoundingBox2D ToDepthPixels(const BoundingBox2D& box, const ColorImage& color,
+                                          const DepthImage& depth);
+
+/// Picks the segment of every usable detection and fuses detections of one segment: a segment
+/// claimed ≥ 50 % by an earlier (higher-scoring) detection adds the later detection's class score
+/// to that observation instead of becoming a second observation of the same thing.
+[[nodiscard]] std::vector<SegmentedDetection> SegmentDetections(
+    const RgbdFrame& frame, const OrganizedCloud& cloud_C, const SegmentationResult& segmentation,
+    const std::vector<Detection>& detections, KeyframeId keyframe_id, const MapperConfig& config);
+
+}  // namespace objmap

@@ -1,0 +1,99 @@
+#include "mapper/map_export.h"
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "pointcloud_io/pointcloud_io.h"
+#include "types/coco_classes.h"
+
+namespace objmap {
+namespace {
+
+nlohmann::json Vector(const Eigen::Vector3f& v) { return {v.x(), v.y(), v.z()}; }
+
+nlohmann::json ObjectJson(const MapObject& object, bool in_inventory) {
+  nlohmann::json scores = nlohmann::json::object();
+  for (int c = 0; c < kNumCocoClasses; ++c) {
+    if (object.accumulated_scores[c] > 0.f) {
+      scores[std::string(CocoClassName(c))] = object.accumulated_scores[c];
+    }
+  }
+  nlohmann::json observations = nlohmann::json::array();
+  for (const ObjectObservation& observation : object.observations) {
+    nlohmann::json classes = nlohmann::json::object();
+    for (const auto& [class_id, score] : observation.class_scores) {
+      classes[std::string(CocoClassName(class_id))] = score;
+    }
+    observations.push_back({{"keyframe", observation.keyframe_id},
+                            {"box",
+                             {observation.box.x_min, observation.box.y_min, observation.box.x_max,
+                              observation.box.y_max}},
+                            {"scores", classes},
+                            {"points", observation.segment_C.size()}});
+  }
+  return {{"id", object.id},
+          {"class", std::string(CocoClassName(object.Label()))},
+          {"confidence", object.Confidence()},
+          {"in_inventory", in_inventory},
+          {"scores", scores},
+          {"observations", observations},
+          {"centroid", Vector(object.centroid_W)},
+          {"bbox_min", Vector(object.min_W)},
+          {"bbox_max", Vector(object.max_W)},
+          {"model_points", object.model_W.size()}};
+}
+
+std::set<ObjectId> ConfirmedIds(const Mapper& mapper) {
+  std::set<ObjectId> ids;
+  for (const MapObject* object : mapper.ConfirmedObjects()) ids.insert(object->id);
+  return ids;
+}
+
+}  // namespace
+
+std::string ObjectsJson(const Mapper& mapper) {
+  const std::set<ObjectId> confirmed = ConfirmedIds(mapper);
+  nlohmann::json objects = nlohmann::json::array();
+  for (const auto& [id, object] : mapper.objects().objects()) {
+    objects.push_back(ObjectJson(object, confirmed.count(id) > 0));
+  }
+  nlohmann::json inventory = nlohmann::json::array();
+  for (const InventoryEntry& entry : mapper.Inventory()) {
+    inventory.push_back({{"class", std::string(CocoClassName(entry.class_id))},
+                         {"count", entry.count},
+                         {"mean_confidence", entry.mean_confidence},
+                         {"objects", entry.objects}});
+  }
+  return nlohmann::json{
+      {"keyframes", mapper.num_keyframes()}, {"inventory", inventory}, {"objects", objects}}
+      .dump(2);
+}
+
+bool WriteMapOutputs(const Mapper& mapper, const std::string& out_dir, std::string* why) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  fs::create_directories(fs::path(out_dir) / "objects", error);
+  if (error) {
+    *why = out_dir + ": " + error.message();
+    return false;
+  }
+  if (!mapper.occupancy().WriteBinary(out_dir + "/map.bt", why)) return false;
+  const std::string json_path = out_dir + "/objects.json";
+  std::ofstream json(json_path);
+  json << ObjectsJson(mapper) << "\n";
+  if (!json) {
+    *why = json_path + ": write failed";
+    return false;
+  }
+  for (const MapObject* object : mapper.ConfirmedObjects()) {
+    const ColoredPoints model = object->model_W.Points();
+    const std::string path = out_dir + "/objects/" + std::to_string(object->id) + "_" +
+                             CocoClassFileName(object->Label()) + ".ply";
+    if (!WritePly(path, model.points, model.colors, why)) return false;
+  }
+  return true;
+}
+
+}  // namespace objmap

@@ -1,0 +1,243 @@
+#include "mapper/mapper.h"
+
+#include <algorithm>
+#include <cassert>
+#include <chrono>
+#include <sstream>
+
+#include "mapper/keyframe_segments.h"
+#include "types/organized_cloud.h"
+
+namespace objmap {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double MillisecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// The keyframe data regeneration needs: pose and the keyframe's clouds in its camera frame.
+struct KeyframeRecord {
+  Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
+  std::vector<Eigen::Vector3f> structure_points_C;
+  std::vector<Eigen::Vector3f> object_points_C;
+};
+
+std::vector<Eigen::Vector3f> ToWorld(const std::vector<Eigen::Vector3f>& points_C,
+                                     const Eigen::Isometry3d& T_W_C) {
+  const Eigen::Isometry3f T = T_W_C.cast<float>();
+  std::vector<Eigen::Vector3f> points_W;
+  points_W.reserve(points_C.size());
+  for (const Eigen::Vector3f& p : points_C) points_W.push_back(T * p);
+  return points_W;
+}
+
+ScanW ToScan(const KeyframeRecord& record) {
+  ScanW scan;
+  scan.origin_W = record.T_W_C.translation().cast<float>();
+  scan.structure_points_W = ToWorld(record.structure_points_C, record.T_W_C);
+  scan.object_points_W = ToWorld(record.object_points_C, record.T_W_C);
+  return scan;
+}
+
+// Splits the valid points into object pixels and the rest, each downsampled to `voxel_m`.
+KeyframeRecord MakeRecord(const OrganizedCloud& cloud_C,
+                          const std::vector<SegmentedDetection>& segmented,
+                          const Eigen::Isometry3d& T_W_C, float voxel_m) {
+  std::vector<char> is_object(cloud_C.size(), 0);
+  for (const SegmentedDetection& entry : segmented) {
+    for (int i : entry.pixels) is_object[i] = 1;
+  }
+  ColoredPoints structure, objects;
+  for (std::size_t i = 0; i < cloud_C.size(); ++i) {
+    if (!cloud_C.IsValid(static_cast<int>(i))) continue;
+    (is_object[i] ? objects : structure).points.push_back(cloud_C.points_C[i]);
+  }
+  KeyframeRecord record;
+  record.T_W_C = T_W_C;
+  record.structure_points_C = VoxelDownsample(structure, voxel_m).points;
+  record.object_points_C = VoxelDownsample(objects, voxel_m).points;
+  return record;
+}
+
+}  // namespace
+
+bool InventoryConfig::IsValid(std::string* why) const {
+  if (min_observations < 1 || !(min_confidence >= 0.f && min_confidence <= 1.f)) {
+    *why = "InventoryConfig: min_observations must be >= 1 and min_confidence in [0, 1]";
+    return false;
+  }
+  return true;
+}
+
+bool MapperConfig::IsValid(std::string* why) const {
+  if (!segmenter.IsValid(why) || !detection_segment.IsValid(why) || !association.IsValid(why) ||
+      !objects.IsValid(why) || !occupancy.IsValid(why) || !inventory.IsValid(why)) {
+    return false;
+  }
+  if (!(min_detection_score >= 0.f && min_detection_score <= 1.f)) {
+    *why = "MapperConfig.min_detection_score must be in [0, 1]";
+    return false;
+  }
+  if (min_segment_points < 1 || !(keyframe_cloud_voxel_m > 0.f)) {
+    *why = "MapperConfig: min_segment_points must be >= 1 and keyframe_cloud_voxel_m > 0";
+    return false;
+  }
+  return true;
+}
+
+struct Mapper::Impl {
+  explicit Impl(const MapperConfig& c)
+      : config(c),
+        segmenter(c.segmenter),
+        associator(c.association),
+        objects(c.objects),
+        occupancy(c.occupancy) {}
+
+  MapperConfig config;
+  Segmenter segmenter;
+  Associator associator;
+  ObjectMap objects;
+  OccupancyMap occupancy;
+  std::map<KeyframeId, KeyframeRecord> keyframes;
+  KeyframeId next_keyframe_id = 1;
+
+  void Associate(std::vector<SegmentedDetection>* segmented, const Eigen::Isometry3d& T_W_C,
+                 KeyframeResult* result);
+  void MergeDuplicates(KeyframeResult* result);
+  void Regenerate();
+};
+
+void Mapper::Impl::Associate(std::vector<SegmentedDetection>* segmented,
+                             const Eigen::Isometry3d& T_W_C, KeyframeResult* result) {
+  std::vector<SegmentToAssociate> segments;
+  for (const SegmentedDetection& entry : *segmented) {
+    SegmentToAssociate segment;
+    segment.points_W = ToWorld(entry.observation.segment_C.points, T_W_C);
+    segment.class_id = entry.observation.class_scores.front().first;
+    segments.push_back(std::move(segment));
+  }
+  const auto assignment = associator.AssignKeyframe(objects, segments);
+  for (std::size_t s = 0; s < segmented->size(); ++s) {
+    ObjectObservation observation = std::move((*segmented)[s].observation);
+    if (assignment[s]) {
+      objects.AddObservation(*assignment[s], std::move(observation), T_W_C);
+      result->updated.push_back(*assignment[s]);
+    } else {
+      result->created.push_back(objects.AddObject(std::move(observation), T_W_C));
+    }
+  }
+}
+
+// Duplicates arise when a first partial view did not overlap enough; once the models grow they
+// overlap, and the paper's map would keep both (its "duplicate from bad depth" failure).
+void Mapper::Impl::MergeDuplicates(KeyframeResult* result) {
+  std::vector<ObjectId> touched = result->created;
+  touched.insert(touched.end(), result->updated.begin(), result->updated.end());
+  for (const auto& [kept, absorbed] : associator.FindDuplicates(objects, touched)) {
+    if (objects.Merge(kept, absorbed)) result->merged.emplace_back(kept, absorbed);
+  }
+  if (!result->merged.empty()) associator.ForgetMissing(objects);
+}
+
+void Mapper::Impl::Regenerate() {
+  objects.Rebuild([this](KeyframeId id) -> std::optional<Eigen::Isometry3d> {
+    auto it = keyframes.find(id);
+    if (it == keyframes.end()) return std::nullopt;
+    return it->second.T_W_C;
+  });
+  occupancy.Clear();
+  for (const auto& [id, record] : keyframes) occupancy.Integrate(ToScan(record));
+}
+
+Mapper::Mapper(const MapperConfig& config) : impl_(std::make_unique<Impl>(config)) {
+  [[maybe_unused]] std::string why;
+  assert(config.IsValid(&why));
+}
+
+Mapper::~Mapper() = default;
+
+bool Mapper::AddKeyframe(const RgbdFrame& frame, const std::vector<Detection>& detections,
+                         KeyframeResult* result, std::string* why) {
+  if (!ValidateFrame(frame, why)) return false;
+  *result = KeyframeResult{};
+  result->keyframe_id = impl_->next_keyframe_id++;
+
+  auto start = Clock::now();
+  const OrganizedCloud cloud_C = BackProject(frame.depth, frame.color, frame.intrinsics);
+  const SegmentationResult segmentation = impl_->segmenter.Segment(cloud_C);
+  std::vector<SegmentedDetection> segmented = SegmentDetections(
+      frame, cloud_C, segmentation, detections, result->keyframe_id, impl_->config);
+  result->detections_used = static_cast<int>(segmented.size());
+  KeyframeRecord record =
+      MakeRecord(cloud_C, segmented, frame.T_W_C, impl_->config.keyframe_cloud_voxel_m);
+  result->timings.segmentation_ms = MillisecondsSince(start);
+
+  start = Clock::now();
+  impl_->Associate(&segmented, frame.T_W_C, result);
+  impl_->MergeDuplicates(result);
+  result->timings.association_ms = MillisecondsSince(start);
+
+  start = Clock::now();
+  impl_->occupancy.Integrate(ToScan(record));
+  impl_->keyframes.emplace(result->keyframe_id, std::move(record));
+  result->timings.occupancy_ms = MillisecondsSince(start);
+  return true;
+}
+
+bool Mapper::UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses, std::string* why) {
+  for (const auto& [id, T_W_C] : poses) {
+    if (impl_->keyframes.count(id) == 0) {
+      *why = "unknown keyframe id " + std::to_string(id);
+      return false;
+    }
+    std::string reason;
+    if (!IsValidRigidTransform(T_W_C.matrix(), &reason)) {
+      *why = "keyframe " + std::to_string(id) + ": " + reason;
+      return false;
+    }
+  }
+  for (const auto& [id, T_W_C] : poses) impl_->keyframes[id].T_W_C = T_W_C;
+  impl_->Regenerate();
+  return true;
+}
+
+std::vector<const MapObject*> Mapper::ConfirmedObjects() const {
+  std::vector<const MapObject*> confirmed;
+  const InventoryConfig& thresholds = impl_->config.inventory;
+  for (const auto& [id, object] : impl_->objects.objects()) {
+    if (static_cast<int>(object.observations.size()) >= thresholds.min_observations &&
+        object.Confidence() >= thresholds.min_confidence) {
+      confirmed.push_back(&object);
+    }
+  }
+  return confirmed;
+}
+
+std::vector<InventoryEntry> Mapper::Inventory() const {
+  std::map<int, InventoryEntry> by_class;
+  for (const MapObject* object : ConfirmedObjects()) {
+    InventoryEntry& entry = by_class[object->Label()];
+    entry.class_id = object->Label();
+    ++entry.count;
+    entry.mean_confidence += object->Confidence();
+    entry.objects.push_back(object->id);
+  }
+  std::vector<InventoryEntry> inventory;
+  for (auto& [class_id, entry] : by_class) {
+    entry.mean_confidence /= static_cast<float>(entry.count);
+    inventory.push_back(entry);
+  }
+  std::stable_sort(
+      inventory.begin(), inventory.end(),
+      [](const InventoryEntry& a, const InventoryEntry& b) { return a.count > b.count; });
+  return inventory;
+}
+
+const ObjectMap& Mapper::objects() const { return impl_->objects; }
+const OccupancyMap& Mapper::occupancy() const { return impl_->occupancy; }
+std::size_t Mapper::num_keyframes() const { return impl_->keyframes.size(); }
+const MapperConfig& Mapper::config() const { return impl_->config; }
+
+}  // namespace objmap

@@ -1,0 +1,109 @@
+#pragma once
+
+#include <Eigen/Geometry>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "association/associator.h"
+#include "objects/object_map.h"
+#include "occupancy/occupancy_map.h"
+#include "segmentation/segmenter.h"
+#include "types/detection.h"
+#include "types/frame.h"
+
+namespace objmap {
+
+/// Which objects count in the inventory: the paper's final confidence threshold plus a minimum
+/// number of observations, which separates real objects from one-off detector mistakes.
+struct InventoryConfig {
+  /// Objects seen in fewer keyframes are left out of the inventory (still kept in the map).
+  int min_observations = 3;
+  /// Objects whose confidence (max accumulated score / observations) is lower are left out.
+  float min_confidence = 0.2f;
+
+  [[nodiscard]] bool IsValid(std::string* why) const;
+};
+
+/// The aggregate configuration of the mapping pipeline: one struct per component.
+struct MapperConfig {
+  SegmenterConfig segmenter;
+  DetectionSegmentConfig detection_segment;
+  AssociationConfig association;
+  ObjectMapConfig objects;
+  OccupancyConfig occupancy;
+  InventoryConfig inventory;
+  /// Detections scoring lower are ignored.
+  float min_detection_score = 0.15f;
+  /// Segments with fewer points after model downsampling are dropped (too small to model).
+  int min_segment_points = 30;
+  /// Detections of these COCO classes may take a supporting-plane segment (a table's top is the
+  /// plane the segmentation separates everything else from).
+  std::vector<int> surface_classes = {60 /* dining table */, 59 /* bed */};
+  /// Voxel size of the per-keyframe structure clouds kept for regeneration, metres.
+  float keyframe_cloud_voxel_m = 0.01f;
+
+  [[nodiscard]] bool IsValid(std::string* why) const;
+};
+
+/// Milliseconds spent in each stage for one keyframe.
+struct StageTimings {
+  double segmentation_ms = 0.0;  ///< back-projection, segmentation, detection-to-segment
+  double association_ms = 0.0;   ///< association, object update, duplicate merging
+  double occupancy_ms = 0.0;     ///< OctoMap integration
+};
+
+/// What one keyframe did to the map.
+struct KeyframeResult {
+  KeyframeId keyframe_id = 0;
+  int detections_used = 0;  ///< detections that got a 3D segment
+  std::vector<ObjectId> created;
+  std::vector<ObjectId> updated;
+  std::vector<std::pair<ObjectId, ObjectId>> merged;  ///< (kept, absorbed)
+  StageTimings timings;
+};
+
+/// One line of the inventory.
+struct InventoryEntry {
+  int class_id = -1;
+  int count = 0;
+  float mean_confidence = 0.f;
+  std::vector<ObjectId> objects;
+};
+
+/// The facade of the core: keyframes in, objects and occupancy out (paper Fig. 3).
+/// Thread-safety: none; one thread at a time (a server wraps it with its own locking).
+class Mapper {
+ public:
+  /// `config` must satisfy IsValid(); an invalid config is a programming error.
+  explicit Mapper(const MapperConfig& config);
+  ~Mapper();
+
+  /// Segments, associates and integrates one keyframe with its detections (boxes in colour
+  /// pixels). Returns false with a reason naming the frame when the frame is invalid; the map is
+  /// then unchanged.
+  [[nodiscard]] bool AddKeyframe(const RgbdFrame& frame, const std::vector<Detection>& detections,
+                                 KeyframeResult* result, std::string* why);
+
+  /// Replaces keyframe poses (a pose-graph update) and regenerates the object models and the
+  /// occupancy map from the stored keyframe clouds. Unknown ids or bad poses: false, map unchanged.
+  [[nodiscard]] bool UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses,
+                                 std::string* why);
+
+  /// Objects that pass the inventory thresholds, by id.
+  [[nodiscard]] std::vector<const MapObject*> ConfirmedObjects() const;
+  /// Per-class counts of the confirmed objects, most frequent first.
+  [[nodiscard]] std::vector<InventoryEntry> Inventory() const;
+
+  [[nodiscard]] const ObjectMap& objects() const;
+  [[nodiscard]] const OccupancyMap& occupancy() const;
+  [[nodiscard]] std::size_t num_keyframes() const;
+  [[nodiscard]] const MapperConfig& config() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace objmap

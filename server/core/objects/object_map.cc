@@ -1,0 +1,136 @@
+#include "objects/object_map.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace objmap {
+namespace {
+
+ColoredPoints Transform(const ColoredPoints& points_C, const Eigen::Isometry3d& T_W_C) {
+  ColoredPoints points_W;
+  points_W.colors = points_C.colors;
+  points_W.points.reserve(points_C.points.size());
+  const Eigen::Isometry3f T = T_W_C.cast<float>();
+  for (const Eigen::Vector3f& p : points_C.points) points_W.points.push_back(T * p);
+  return points_W;
+}
+
+}  // namespace
+
+bool ObjectMapConfig::IsValid(std::string* why) const {
+  if (!(model_voxel_size_m > 0.f)) {
+    *why = "ObjectMapConfig.model_voxel_size_m must be positive";
+    return false;
+  }
+  return true;
+}
+
+int MapObject::Label() const {
+  return static_cast<int>(std::max_element(accumulated_scores.begin(), accumulated_scores.end()) -
+                          accumulated_scores.begin());
+}
+
+float MapObject::Confidence() const {
+  if (observations.empty()) return 0.f;
+  return accumulated_scores[Label()] / static_cast<float>(observations.size());
+}
+
+std::vector<KeyframeId> MapObject::Keyframes() const {
+  std::vector<KeyframeId> keyframes;
+  for (const ObjectObservation& observation : observations) {
+    keyframes.push_back(observation.keyframe_id);
+  }
+  std::sort(keyframes.begin(), keyframes.end());
+  keyframes.erase(std::unique(keyframes.begin(), keyframes.end()), keyframes.end());
+  return keyframes;
+}
+
+ObjectMap::ObjectMap(const ObjectMapConfig& config) : config_(config) {}
+
+ObjectId ObjectMap::AddObject(ObjectObservation observation, const Eigen::Isometry3d& T_W_C) {
+  const ObjectId id = next_id_++;
+  MapObject& object = objects_[id];
+  object.id = id;
+  object.model_W = VoxelModel(config_.model_voxel_size_m);
+  AddToModel(&object, observation, T_W_C);
+  object.observations.push_back(std::move(observation));
+  return id;
+}
+
+bool ObjectMap::AddObservation(ObjectId id, ObjectObservation observation,
+                               const Eigen::Isometry3d& T_W_C) {
+  auto it = objects_.find(id);
+  if (it == objects_.end()) return false;
+  AddToModel(&it->second, observation, T_W_C);
+  it->second.observations.push_back(std::move(observation));
+  return true;
+}
+
+void ObjectMap::AddToModel(MapObject* object, const ObjectObservation& observation,
+                           const Eigen::Isometry3d& T_W_C) {
+  for (const auto& [class_id, score] : observation.class_scores) {
+    if (class_id >= 0 && class_id < kNumCocoClasses) object->accumulated_scores[class_id] += score;
+  }
+  object->model_W.Insert(Transform(observation.segment_C, T_W_C));
+  UpdateBounds(object);
+}
+
+void ObjectMap::UpdateBounds(MapObject* object) {
+  const ColoredPoints points = object->model_W.Points();
+  ++object->version;
+  if (points.empty()) {
+    object->centroid_W = object->min_W = object->max_W = Eigen::Vector3f::Zero();
+    return;
+  }
+  Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+  Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
+  Eigen::Vector3f hi = -lo;
+  for (const Eigen::Vector3f& p : points.points) {
+    sum += p;
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  object->centroid_W = sum / static_cast<float>(points.size());
+  object->min_W = lo;
+  object->max_W = hi;
+}
+
+bool ObjectMap::Merge(ObjectId kept, ObjectId absorbed) {
+  if (kept == absorbed) return false;
+  auto kept_it = objects_.find(kept);
+  auto absorbed_it = objects_.find(absorbed);
+  if (kept_it == objects_.end() || absorbed_it == objects_.end()) return false;
+  MapObject& target = kept_it->second;
+  MapObject& source = absorbed_it->second;
+  for (int c = 0; c < kNumCocoClasses; ++c) {
+    target.accumulated_scores[c] += source.accumulated_scores[c];
+  }
+  target.model_W.Insert(source.model_W);
+  for (ObjectObservation& observation : source.observations) {
+    target.observations.push_back(std::move(observation));
+  }
+  UpdateBounds(&target);
+  objects_.erase(absorbed_it);
+  return true;
+}
+
+bool ObjectMap::Remove(ObjectId id) { return objects_.erase(id) > 0; }
+
+void ObjectMap::Rebuild(const KeyframePoseLookup& pose_of) {
+  for (auto& [id, object] : objects_) {
+    object.model_W.Clear();
+    for (const ObjectObservation& observation : object.observations) {
+      const std::optional<Eigen::Isometry3d> T_W_C = pose_of(observation.keyframe_id);
+      if (T_W_C) object.model_W.Insert(Transform(observation.segment_C, *T_W_C));
+    }
+    UpdateBounds(&object);
+  }
+}
+
+const MapObject* ObjectMap::Find(ObjectId id) const {
+  auto it = objects_.find(id);
+  return it == objects_.end() ? nullptr : &it->second;
+}
+
+}  // namespace objmap

@@ -1,0 +1,97 @@
+#pragma once
+
+#include <Eigen/Geometry>
+#include <array>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "objects/voxel_model.h"
+#include "types/coco_classes.h"
+#include "types/detection.h"
+#include "types/frame.h"
+
+namespace objmap {
+
+/// One detection of an object in one keyframe: enough to rebuild the object after the
+/// keyframe's pose changes (paper Sec. III-D: the segments are stored with pose references).
+struct ObjectObservation {
+  KeyframeId keyframe_id = 0;
+  BoundingBox2D box;  ///< detection box, colour pixels
+  /// Class scores of this observation. Usually one entry; several when detections of different
+  /// classes in the same keyframe picked the same segment.
+  std::vector<std::pair<int, float>> class_scores;
+  ColoredPoints segment_C;  ///< the detection's 3D segment, camera frame, downsampled
+};
+
+struct ObjectMapConfig {
+  /// Voxel size of the object models, metres (paper: 5 mm).
+  float model_voxel_size_m = 0.005f;
+
+  [[nodiscard]] bool IsValid(std::string* why) const;
+};
+
+/// An object of the map: its observations, accumulated class scores and point model.
+struct MapObject {
+  ObjectId id = 0;
+  std::vector<ObjectObservation> observations;
+  /// Sum over observations of each class's score (paper Eq. 1).
+  std::array<float, kNumCocoClasses> accumulated_scores{};
+  VoxelModel model_W;
+  Eigen::Vector3f centroid_W = Eigen::Vector3f::Zero();
+  Eigen::Vector3f min_W = Eigen::Vector3f::Zero();  ///< axis-aligned bounds of the model
+  Eigen::Vector3f max_W = Eigen::Vector3f::Zero();
+  /// Increments whenever the model changes, so caches (k-d trees) know when to rebuild.
+  std::uint64_t version = 0;
+
+  /// argmax_c of the accumulated scores.
+  [[nodiscard]] int Label() const;
+  /// max_c s_c / n with n the number of observations (paper Sec. III-D).
+  [[nodiscard]] float Confidence() const;
+  /// Keyframes that saw this object, ascending, without repeats.
+  [[nodiscard]] std::vector<KeyframeId> Keyframes() const;
+};
+
+/// Returns the world pose of a keyframe; used to rebuild models after pose updates.
+using KeyframePoseLookup = std::function<std::optional<Eigen::Isometry3d>(KeyframeId)>;
+
+/// The set of objects. Ids are never reused and survive Rebuild(). Thread-safety: none.
+class ObjectMap {
+ public:
+  explicit ObjectMap(const ObjectMapConfig& config = ObjectMapConfig{});
+
+  /// Creates an object from a first observation; returns its id.
+  ObjectId AddObject(ObjectObservation observation, const Eigen::Isometry3d& T_W_C);
+
+  /// Adds an observation to an existing object (false when the id is unknown).
+  bool AddObservation(ObjectId id, ObjectObservation observation, const Eigen::Isometry3d& T_W_C);
+
+  /// Moves every observation of `absorbed` into `kept` and removes `absorbed`.
+  bool Merge(ObjectId kept, ObjectId absorbed);
+
+  /// Removes an object (false when unknown).
+  bool Remove(ObjectId id);
+
+  /// Rebuilds every model from its stored segments with the poses `pose_of` returns now.
+  /// Observations whose keyframe has no pose are kept but not drawn.
+  void Rebuild(const KeyframePoseLookup& pose_of);
+
+  [[nodiscard]] const MapObject* Find(ObjectId id) const;
+  [[nodiscard]] const std::map<ObjectId, MapObject>& objects() const { return objects_; }
+  [[nodiscard]] std::size_t size() const { return objects_.size(); }
+  [[nodiscard]] const ObjectMapConfig& config() const { return config_; }
+
+ private:
+  void AddToModel(MapObject* object, const ObjectObservation& observation,
+                  const Eigen::Isometry3d& T_W_C);
+  static void UpdateBounds(MapObject* object);
+
+  ObjectMapConfig config_;
+  std::map<ObjectId, MapObject> objects_;
+  ObjectId next_id_ = 1;
+};
+
+}  // namespace objmap

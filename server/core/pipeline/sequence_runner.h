@@ -1,0 +1,57 @@
+#pragma once
+// Runs a recorded sequence through detector and mapper: the body of `objmap map`.
+
+#include <cstddef>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "dataset/keyframe_selector.h"
+#include "dataset/sequence_reader.h"
+#include "detection/detector.h"
+#include "mapper/mapper.h"
+
+namespace objmap {
+
+/// Which frames of a sequence are mapped and what happens with bad ones.
+struct SequenceRunConfig {
+  KeyframeSelectorConfig keyframes;
+  /// First frame index to read.
+  std::size_t first_frame = 0;
+  /// Number of frames to read from first_frame; 0 reads to the end.
+  std::size_t max_frames = 0;
+  /// A frame that cannot be read or mapped stops the run (true) or is skipped with a message
+  /// naming its file (false, the default).
+  bool stop_on_bad_frame = false;
+
+  [[nodiscard]] bool IsValid(std::string* why) const;
+};
+
+/// Per-keyframe record of a run, for timings and reports.
+struct KeyframeReport {
+  std::size_t frame_index = 0;
+  double detection_ms = 0.0;
+  int detections = 0;
+  KeyframeResult result;
+};
+
+struct SequenceRunReport {
+  std::size_t frames_read = 0;
+  std::vector<KeyframeReport> keyframes;
+  std::vector<std::string> skipped;  ///< one message per skipped frame, naming the file
+};
+
+/// Called after every frame: (frames done, frames in total, keyframes so far).
+using ProgressCallback = std::function<void(std::size_t, std::size_t, std::size_t)>;
+
+/// Maps frames of `reader` in order: keyframe selection by camera motion, then detection and
+/// Mapper::AddKeyframe. Returns false only when the run stops (bad frame with
+/// stop_on_bad_frame, an empty selection); `why` names the frame and the file.
+[[nodiscard]] bool RunSequence(const SequenceReader& reader, Detector* detector, Mapper* mapper,
+                               const SequenceRunConfig& config, const ProgressCallback& progress,
+                               SequenceRunReport* report, std::string* why);
+
+/// Median of a list of values (0 for an empty list).
+[[nodiscard]] double Median(std::vector<double> values);
+
+}  // namespace objmap

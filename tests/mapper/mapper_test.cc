@@ -1,0 +1,151 @@
+#include "mapper/mapper.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "mapper/map_export.h"
+#include "test_scenes.h"
+#include "types/coco_classes.h"
+
+namespace objmap {
+namespace {
+
+using testing::SceneBox;
+
+const int kCup = CocoClassId("cup");
+
+// A table top with two cups and a wall behind, seen from three viewpoints.
+class MapperScene : public ::testing::Test {
+ protected:
+  MapperScene() {
+    boxes_ = {
+        {{-0.6, -0.8, 0.60}, {0.6, 0.8, 0.70}, {150, 100, 60}},      // table top
+        {{-0.05, -0.25, 0.70}, {0.05, -0.15, 0.82}, {200, 30, 30}},  // cup 1
+        {{-0.05, 0.15, 0.70}, {0.05, 0.25, 0.82}, {30, 30, 200}},    // cup 2
+        {{1.5, -2.0, 0.0}, {1.6, 2.0, 2.5}, {220, 220, 220}},        // wall
+    };
+    eyes_ = {{-1.0, 0.0, 1.3}, {-1.0, 0.25, 1.3}, {-0.95, -0.25, 1.35}};
+  }
+
+  // The detection box of a scene box: its projected corners.
+  BoundingBox2D Project(const SceneBox& box, const Eigen::Isometry3d& T_W_C) const {
+    BoundingBox2D out{1e9f, 1e9f, -1e9f, -1e9f};
+    for (int corner = 0; corner < 8; ++corner) {
+      const Eigen::Vector3d p_W((corner & 1) ? box.hi.x() : box.lo.x(),
+                                (corner & 2) ? box.hi.y() : box.lo.y(),
+                                (corner & 4) ? box.hi.z() : box.lo.z());
+      const Eigen::Vector3d p_C = T_W_C.inverse() * p_W;
+      const float u = static_cast<float>(K_.fx * p_C.x() / p_C.z() + K_.cx);
+      const float v = static_cast<float>(K_.fy * p_C.y() / p_C.z() + K_.cy);
+      out = {std::min(out.x_min, u), std::min(out.y_min, v), std::max(out.x_max, u),
+             std::max(out.y_max, v)};
+    }
+    return out;
+  }
+
+  Eigen::Isometry3d Pose(int view) const {
+    return testing::LookAt(eyes_[view], Eigen::Vector3d(0, 0, 0.7));
+  }
+
+  RgbdFrame Frame(int view) const {
+    return testing::RenderFrame(boxes_, K_, Pose(view), "view-" + std::to_string(view));
+  }
+
+  std::vector<Detection> CupDetections(int view) const {
+    return {{Project(boxes_[1], Pose(view)), kCup, 0.6f},
+            {Project(boxes_[2], Pose(view)), kCup, 0.5f}};
+  }
+
+  void MapAllViews(Mapper* mapper) const {
+    for (int view = 0; view < 3; ++view) {
+      KeyframeResult result;
+      std::string why;
+      ASSERT_TRUE(mapper->AddKeyframe(Frame(view), CupDetections(view), &result, &why)) << why;
+      EXPECT_EQ(result.detections_used, 2) << "view " << view;
+    }
+  }
+
+  CameraIntrinsics K_;
+  std::vector<SceneBox> boxes_;
+  std::vector<Eigen::Vector3d> eyes_;
+};
+
+TEST_F(MapperScene, TwoCupsSeenThriceAreTwoObjects) {
+  Mapper mapper{MapperConfig{}};
+  MapAllViews(&mapper);
+  ASSERT_EQ(mapper.objects().size(), 2u);
+  for (const auto& [id, object] : mapper.objects().objects()) {
+    EXPECT_EQ(object.observations.size(), 3u);
+    EXPECT_EQ(object.Label(), kCup);
+    EXPECT_NEAR(object.centroid_W.z(), 0.76, 0.05);
+    EXPECT_NEAR(std::abs(object.centroid_W.y()), 0.2, 0.05);
+  }
+  const auto inventory = mapper.Inventory();
+  ASSERT_EQ(inventory.size(), 1u);
+  EXPECT_EQ(inventory[0].class_id, kCup);
+  EXPECT_EQ(inventory[0].count, 2);
+  EXPECT_NEAR(inventory[0].mean_confidence, 0.55f, 1e-4);
+  EXPECT_NE(ObjectsJson(mapper).find("\"class\": \"cup\""), std::string::npos);
+}
+
+TEST_F(MapperScene, OccupancyHoldsStructureNotObjects) {
+  Mapper mapper{MapperConfig{}};
+  MapAllViews(&mapper);
+  const OccupancyMap& occupancy = mapper.occupancy();
+  EXPECT_EQ(occupancy.Query({1.505, 0.0, 1.0}), VoxelState::kOccupied);     // wall surface
+  EXPECT_EQ(occupancy.Query({-0.3, 0.0, 1.1}), VoxelState::kFree);          // air above the table
+  EXPECT_EQ(occupancy.Query({0.0, 0.0, 0.695}), VoxelState::kOccupied);     // table top
+  EXPECT_NE(occupancy.Query({-0.045, -0.2, 0.78}), VoxelState::kOccupied);  // cup surface
+  EXPECT_EQ(occupancy.Query({2.5, 0.0, 1.0}), VoxelState::kUnknown);        // behind the wall
+}
+
+TEST_F(MapperScene, PoseUpdateRegeneratesObjectsAndOccupancy) {
+  Mapper mapper{MapperConfig{}};
+  MapAllViews(&mapper);
+  std::map<ObjectId, Eigen::Vector3f> before;
+  for (const auto& [id, object] : mapper.objects().objects()) before[id] = object.centroid_W;
+
+  Eigen::Isometry3d G = Eigen::Isometry3d::Identity();
+  G.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  G.translation() = Eigen::Vector3d(0.5, -0.2, 0.1);
+  std::map<KeyframeId, Eigen::Isometry3d> poses;
+  for (int view = 0; view < 3; ++view) poses[view + 1] = G * Pose(view);
+  std::string why;
+  ASSERT_TRUE(mapper.UpdatePoses(poses, &why)) << why;
+
+  ASSERT_EQ(mapper.objects().size(), before.size());
+  for (const auto& [id, centroid] : before) {
+    const MapObject* object = mapper.objects().Find(id);
+    ASSERT_NE(object, nullptr) << "object ids survive regeneration";
+    const Eigen::Vector3f expected = (G.cast<float>() * centroid);
+    EXPECT_LT((object->centroid_W - expected).norm(), 0.01f);
+  }
+  const Eigen::Vector3d wall_point = G * Eigen::Vector3d(1.505, 0.0, 1.0);
+  EXPECT_EQ(mapper.occupancy().Query(wall_point), VoxelState::kOccupied);
+}
+
+TEST_F(MapperScene, BadInputIsRejectedAndChangesNothing) {
+  Mapper mapper{MapperConfig{}};
+  std::string why;
+  KeyframeResult result;
+  RgbdFrame frame = Frame(0);
+  frame.T_W_C.matrix()(0, 3) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(mapper.AddKeyframe(frame, CupDetections(0), &result, &why));
+  EXPECT_NE(why.find("view-0"), std::string::npos) << why;
+  EXPECT_NE(why.find("NaN"), std::string::npos) << why;
+
+  frame = Frame(0);
+  frame.depth.width = 320;
+  EXPECT_FALSE(mapper.AddKeyframe(frame, CupDetections(0), &result, &why));
+  EXPECT_NE(why.find("depth image is 320x480"), std::string::npos) << why;
+  EXPECT_EQ(mapper.num_keyframes(), 0u);
+  EXPECT_EQ(mapper.objects().size(), 0u);
+
+  EXPECT_FALSE(mapper.UpdatePoses({{42, Eigen::Isometry3d::Identity()}}, &why));
+  EXPECT_NE(why.find("unknown keyframe id 42"), std::string::npos) << why;
+}
+
+}  // namespace
+}  // namespace objmap

@@ -1,0 +1,89 @@
+#include "objects/object_map.h"
+
+#include <gtest/gtest.h>
+
+#include "test_scenes.h"
+
+namespace objmap {
+namespace {
+
+ObjectObservation Observation(KeyframeId keyframe, int class_id, float score,
+                              const std::vector<Eigen::Vector3f>& points_C) {
+  ObjectObservation observation;
+  observation.keyframe_id = keyframe;
+  observation.class_scores = {{class_id, score}};
+  observation.segment_C.points = points_C;
+  return observation;
+}
+
+const Eigen::Isometry3d kIdentity = Eigen::Isometry3d::Identity();
+const int kCup = CocoClassId("cup");
+const int kBowl = CocoClassId("bowl");
+
+TEST(VoxelModel, AveragesPointsPerVoxel) {
+  VoxelModel model(0.01f);
+  ColoredPoints points;
+  points.points = {{0.001f, 0.001f, 0.001f}, {0.003f, 0.003f, 0.003f}, {0.015f, 0.f, 0.f}};
+  points.colors = {{0, 0, 0}, {200, 100, 50}, {9, 9, 9}};
+  model.Insert(points);
+  ASSERT_EQ(model.size(), 2u);
+  const ColoredPoints out = model.Points();
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_NEAR(out.points[0].x(), 0.002f, 1e-6);
+  EXPECT_EQ(out.colors[0][0], 100);
+  EXPECT_EQ(out.colors[0][1], 50);
+}
+
+TEST(ObjectMap, AccumulatesScoresAsThePaper) {
+  ObjectMap map;
+  const auto cup_points = testing::BoxSurface({0, 0, 0}, {0.08f, 0.08f, 0.1f}, 0.005f);
+  const ObjectId id =
+      map.AddObject(Observation(1, kCup, 0.6f, cup_points), Eigen::Isometry3d::Identity());
+  EXPECT_TRUE(map.AddObservation(id, Observation(2, kBowl, 0.7f, cup_points),
+                                 Eigen::Isometry3d::Identity()));
+  EXPECT_TRUE(map.AddObservation(id, Observation(3, kCup, 0.5f, cup_points),
+                                 Eigen::Isometry3d::Identity()));
+  const MapObject& object = *map.Find(id);
+  EXPECT_EQ(object.Label(), kCup);                     // 1.1 (cup) beats 0.7 (bowl)
+  EXPECT_NEAR(object.Confidence(), 1.1f / 3.f, 1e-6);  // max score / observations
+  EXPECT_EQ(object.Keyframes(), (std::vector<KeyframeId>{1, 2, 3}));
+  EXPECT_FALSE(map.AddObservation(999, Observation(4, kCup, 0.5f, cup_points),
+                                  Eigen::Isometry3d::Identity()));
+}
+
+TEST(ObjectMap, ModelIsInWorldFrameAndRebuildsWithNewPoses) {
+  ObjectMap map;
+  const auto points_C = testing::BoxSurface({-0.05f, -0.05f, 1.f}, {0.05f, 0.05f, 1.1f}, 0.005f);
+  Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
+  T_W_C.translation() = Eigen::Vector3d(1, 2, 3);
+  const ObjectId id = map.AddObject(Observation(7, kCup, 0.9f, points_C), T_W_C);
+  EXPECT_NEAR(map.Find(id)->centroid_W.x(), 1.f, 0.01f);
+  EXPECT_NEAR(map.Find(id)->centroid_W.z(), 4.05f, 0.01f);
+
+  Eigen::Isometry3d corrected = T_W_C;
+  corrected.translation().x() += 0.5;
+  map.Rebuild([&](KeyframeId k) -> std::optional<Eigen::Isometry3d> {
+    if (k == 7) return corrected;
+    return std::nullopt;
+  });
+  EXPECT_NEAR(map.Find(id)->centroid_W.x(), 1.5f, 0.01f);
+  EXPECT_EQ(map.Find(id)->id, id);
+}
+
+TEST(ObjectMap, MergeMovesObservationsAndScores) {
+  ObjectMap map;
+  const auto points = testing::BoxSurface({0, 0, 0}, {0.1f, 0.1f, 0.1f}, 0.01f);
+  const ObjectId a = map.AddObject(Observation(1, kCup, 0.5f, points), kIdentity);
+  const ObjectId b = map.AddObject(Observation(2, kCup, 0.4f, points), kIdentity);
+  ASSERT_TRUE(map.Merge(a, b));
+  EXPECT_EQ(map.size(), 1u);
+  EXPECT_EQ(map.Find(b), nullptr);
+  EXPECT_EQ(map.Find(a)->observations.size(), 2u);
+  EXPECT_NEAR(map.Find(a)->accumulated_scores[kCup], 0.9f, 1e-6);
+  EXPECT_FALSE(map.Merge(a, b));
+  // Ids are never reused.
+  EXPECT_GT(map.AddObject(Observation(3, kCup, 0.4f, points), {}), b);
+}
+
+}  // namespace
+}  // namespace objmap

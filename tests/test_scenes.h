@@ -1,0 +1,113 @@
+#pragma once
+// Small geometric fixtures shared by the object and association tests.
+
+#include <Eigen/Core>
+#include <vector>
+
+namespace objmap::testing {
+
+/// Points on the surface of an axis-aligned box [lo, hi] sampled every `step_m`.
+inline std::vector<Eigen::Vector3f> BoxSurface(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi,
+                                               float step_m) {
+  std::vector<Eigen::Vector3f> points;
+  for (float x = lo.x(); x <= hi.x() + 1e-6f; x += step_m) {
+    for (float y = lo.y(); y <= hi.y() + 1e-6f; y += step_m) {
+      for (float z = lo.z(); z <= hi.z() + 1e-6f; z += step_m) {
+        const bool on_surface = x - lo.x() < step_m || hi.x() - x < step_m || y - lo.y() < step_m ||
+                                hi.y() - y < step_m || z - lo.z() < step_m || hi.z() - z < step_m;
+        if (on_surface) points.emplace_back(x, y, z);
+      }
+    }
+  }
+  return points;
+}
+
+}  // namespace objmap::testing
+
+#include <Eigen/Geometry>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+
+#include "types/frame.h"
+
+namespace objmap::testing {
+
+/// An axis-aligned box of a synthetic scene, world frame.
+struct SceneBox {
+  Eigen::Vector3d lo;
+  Eigen::Vector3d hi;
+  std::array<std::uint8_t, 3> rgb{128, 128, 128};
+};
+
+/// Distance along the ray to the first hit of `box` (slab method), or +inf.
+inline double RayBoxHit(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                        const SceneBox& box) {
+  double t_near = 0.0, t_far = std::numeric_limits<double>::infinity();
+  for (int axis = 0; axis < 3; ++axis) {
+    if (std::abs(direction[axis]) < 1e-12) {
+      if (origin[axis] < box.lo[axis] || origin[axis] > box.hi[axis]) {
+        return std::numeric_limits<double>::infinity();
+      }
+      continue;
+    }
+    double t0 = (box.lo[axis] - origin[axis]) / direction[axis];
+    double t1 = (box.hi[axis] - origin[axis]) / direction[axis];
+    if (t0 > t1) std::swap(t0, t1);
+    t_near = std::max(t_near, t0);
+    t_far = std::min(t_far, t1);
+    if (t_near > t_far) return std::numeric_limits<double>::infinity();
+  }
+  return t_near;
+}
+
+/// Renders a pinhole RGB-D frame of `boxes` seen from T_W_C (depth along the optical axis).
+inline RgbdFrame RenderFrame(const std::vector<SceneBox>& boxes, const CameraIntrinsics& K,
+                             const Eigen::Isometry3d& T_W_C, const std::string& name) {
+  RgbdFrame frame;
+  frame.name = name;
+  frame.intrinsics = K;
+  frame.T_W_C = T_W_C;
+  frame.depth.width = frame.color.width = K.width;
+  frame.depth.height = frame.color.height = K.height;
+  frame.depth.depth_m.assign(static_cast<size_t>(K.width) * K.height, 0.f);
+  frame.color.rgb.assign(static_cast<size_t>(K.width) * K.height * 3, 0);
+  const Eigen::Vector3d origin = T_W_C.translation();
+  for (int v = 0; v < K.height; ++v) {
+    for (int u = 0; u < K.width; ++u) {
+      const Eigen::Vector3d ray_C((u - K.cx) / K.fx, (v - K.cy) / K.fy, 1.0);
+      const Eigen::Vector3d ray_W = T_W_C.linear() * ray_C;
+      double best = std::numeric_limits<double>::infinity();
+      const SceneBox* hit = nullptr;
+      for (const SceneBox& box : boxes) {
+        const double t = RayBoxHit(origin, ray_W, box);
+        if (t < best) {
+          best = t;
+          hit = &box;
+        }
+      }
+      if (hit == nullptr) continue;
+      const size_t i = static_cast<size_t>(v) * K.width + u;
+      frame.depth.depth_m[i] = static_cast<float>(best);  // ray_C has z = 1: t is the depth
+      for (int c = 0; c < 3; ++c) frame.color.rgb[3 * i + c] = hit->rgb[c];
+    }
+  }
+  return frame;
+}
+
+/// Camera at `eye` looking at `target`, with world +z up (camera y points down).
+inline Eigen::Isometry3d LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {
+  const Eigen::Vector3d z = (target - eye).normalized();
+  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
+  const Eigen::Vector3d y = z.cross(x);
+  Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
+  T_W_C.linear().col(0) = x;
+  T_W_C.linear().col(1) = y;
+  T_W_C.linear().col(2) = z;
+  T_W_C.translation() = eye;
+  return T_W_C;
+}
+
+}  // namespace objmap::testing
