@@ -14,7 +14,8 @@ struct CenterNetConfig {
   /// Peaks below this score are dropped. Low on purpose: multi-view accumulation in the object
   /// map separates real objects from one-off mistakes (paper Sec. III-D).
   float score_threshold = 0.15f;
-  /// Network input side in pixels (the model was trained at 512).
+  /// Network input side in pixels. The converted graph fixes its upsampling sizes for 512, so
+  /// other values only suit other conversions; a mismatch fails Detect() with a reason.
   int input_size = 512;
   /// Upper bound on detections per image, best first.
   int max_detections = 100;
