@@ -1,0 +1,188 @@
+// Runs the `objmap` executable on a small rendered 7-Scenes folder, as a user would.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <sstream>
+
+#include "test_data.h"
+#include "test_scenes.h"
+#include "types/coco_classes.h"
+
+namespace objmap {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::SceneBox;
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr together
+};
+
+CommandResult Run(const std::string& arguments) {
+  const std::string command = std::string(OBJMAP_CLI_PATH) + " " + arguments + " 2>&1";
+  CommandResult result;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) return result;
+  std::array<char, 4096> buffer;
+  size_t n;
+  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0)
+    result.output.append(buffer.data(), n);
+  const int status = pclose(pipe);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+std::string PoseText(const Eigen::Isometry3d& T) {
+  std::ostringstream text;
+  text.precision(12);
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) text << T.matrix()(r, c) << (c == 3 ? "\n" : " ");
+  }
+  return text.str();
+}
+
+// A rendered table with two cups, four frames, and a detections file for them.
+class CliScene : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("objmap_cli_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_ / "seq");
+    const std::vector<SceneBox> boxes = {{{-0.6, -0.8, 0.60}, {0.6, 0.8, 0.70}, {150, 100, 60}},
+                                         {{-0.05, -0.25, 0.70}, {0.05, -0.15, 0.82}, {200, 30, 30}},
+                                         {{-0.05, 0.15, 0.70}, {0.05, 0.25, 0.82}, {30, 30, 200}},
+                                         {{1.5, -2.0, 0.0}, {1.6, 2.0, 2.5}, {220, 220, 220}}};
+    const CameraIntrinsics K;
+    std::ofstream(Seq("camera-intrinsics.txt")) << "585 0 320\n0 585 240\n0 0 1\n";
+    nlohmann::json detections;
+    for (int i = 0; i < 4; ++i) {
+      const Eigen::Isometry3d T_W_C =
+          testing::LookAt({-1.0, -0.2 + 0.15 * i, 1.3}, Eigen::Vector3d(0, 0, 0.7));
+      const RgbdFrame frame = testing::RenderFrame(boxes, K, T_W_C, "");
+      WriteFrame(i, frame);
+      const std::string name = "frame-00000" + std::to_string(i);
+      for (int cup = 1; cup <= 2; ++cup) {
+        const auto box = Project(boxes[cup], T_W_C, K);
+        detections["frames"][name].push_back({{"box", box}, {"class", "cup"}, {"score", 0.6}});
+      }
+    }
+    std::ofstream(Path("detections.json")) << detections.dump();
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string Seq(const std::string& name) const { return (dir_ / "seq" / name).string(); }
+
+  void WriteFrame(int i, const RgbdFrame& frame) const {
+    cv::Mat depth(frame.depth.height, frame.depth.width, CV_16UC1);
+    cv::Mat color(frame.color.height, frame.color.width, CV_8UC3);
+    for (int v = 0; v < depth.rows; ++v) {
+      for (int u = 0; u < depth.cols; ++u) {
+        const size_t k = static_cast<size_t>(v) * depth.cols + u;
+        depth.at<std::uint16_t>(v, u) = static_cast<std::uint16_t>(frame.depth.depth_m[k] * 1000.f);
+        color.at<cv::Vec3b>(v, u) = {frame.color.rgb[3 * k + 2], frame.color.rgb[3 * k + 1],
+                                     frame.color.rgb[3 * k]};
+      }
+    }
+    const std::string stem = Seq("frame-00000" + std::to_string(i));
+    cv::imwrite(stem + ".depth.png", depth);
+    cv::imwrite(stem + ".color.png", color);
+    std::ofstream(stem + ".pose.txt") << PoseText(frame.T_W_C);
+  }
+
+  static std::array<float, 4> Project(const SceneBox& box, const Eigen::Isometry3d& T_W_C,
+                                      const CameraIntrinsics& K) {
+    std::array<float, 4> out{1e9f, 1e9f, -1e9f, -1e9f};
+    for (int corner = 0; corner < 8; ++corner) {
+      const Eigen::Vector3d p_C =
+          T_W_C.inverse() * Eigen::Vector3d((corner & 1) ? box.hi.x() : box.lo.x(),
+                                            (corner & 2) ? box.hi.y() : box.lo.y(),
+                                            (corner & 4) ? box.hi.z() : box.lo.z());
+      const float u = static_cast<float>(K.fx * p_C.x() / p_C.z() + K.cx);
+      const float v = static_cast<float>(K.fy * p_C.y() / p_C.z() + K.cy);
+      out = {std::min(out[0], u), std::min(out[1], v), std::max(out[2], u), std::max(out[3], v)};
+    }
+    return out;
+  }
+
+  std::string MapArguments(const std::string& extra) const {
+    return "map " + (dir_ / "seq").string() + " --out " + Path("out") + " --detections " +
+           Path("detections.json") + " --every-frame --min-observations 3 " + extra;
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(CliScene, MapsAndWritesEveryOutput) {
+  const CommandResult run = Run(MapArguments(""));
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("keyframes: 4 of 4"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("median ms per keyframe"), std::string::npos) << run.output;
+  ASSERT_TRUE(fs::exists(Path("out/map.bt")));
+  ASSERT_TRUE(fs::exists(Path("out/timings.csv")));
+  std::ifstream json_file(Path("out/objects.json"));
+  const nlohmann::json objects = nlohmann::json::parse(json_file);
+  ASSERT_EQ(objects["inventory"].size(), 1u) << objects.dump(2);
+  EXPECT_EQ(objects["inventory"][0]["class"], "cup");
+  EXPECT_EQ(objects["inventory"][0]["count"], 2);
+  int ply_files = 0;
+  for (const auto& entry : fs::directory_iterator(Path("out/objects"))) {
+    ply_files += entry.path().extension() == ".ply" ? 1 : 0;
+  }
+  EXPECT_EQ(ply_files, 2);
+}
+
+TEST_F(CliScene, BadFramesAreSkippedWithTheirFileNamedOrStopTheRun) {
+  std::ofstream(Seq("frame-000001.color.png")) << "not an image";
+  std::ofstream(Seq("frame-000002.pose.txt")) << "1 0 0 nan\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";
+  CommandResult run = Run(MapArguments("--min-observations 2"));
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("skipped frame 1: " + Seq("frame-000001.color.png")), std::string::npos)
+      << run.output;
+  EXPECT_NE(run.output.find("skipped frame 2: " + Seq("frame-000002.pose.txt") + ": pose has NaN"),
+            std::string::npos)
+      << run.output;
+  EXPECT_NE(run.output.find("keyframes: 2 of 4"), std::string::npos) << run.output;
+
+  run = Run(MapArguments("--stop-on-error"));
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("stopped at frame 1"), std::string::npos) << run.output;
+}
+
+TEST_F(CliScene, EmptyOrMissingInputIsAClearError) {
+  fs::create_directories(Path("empty"));
+  CommandResult run = Run("map " + Path("empty") + " --out " + Path("o") + " --detections " +
+                          Path("detections.json"));
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.output.find("empty sequence"), std::string::npos) << run.output;
+  run = Run("map " + Path("seq") + " --out " + Path("o") + " --detections " + Path("nope.json"));
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.output.find("nope.json"), std::string::npos) << run.output;
+  run = Run("map " + Path("seq") + " --out " + Path("o") + " --max-frames many");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.output.find("--max-frames expects a number"), std::string::npos) << run.output;
+}
+
+TEST(CliSegment, WritesOneLabelPerPoint) {
+  const std::string cloud = testing::SharedDataPath("mosd-learn/learn0.pcd");
+  OBJMAP_REQUIRE_PATH(cloud);
+  const std::string out = (fs::temp_directory_path() / "objmap_cli_segment.pcd").string();
+  const CommandResult run = Run("segment " + cloud + " --out " + out);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("640x480"), std::string::npos) << run.output;
+  EXPECT_GT(fs::file_size(out), 640u * 480u * 4u);
+  std::ifstream header(out);
+  std::string text((std::istreambuf_iterator<char>(header)), {});
+  EXPECT_NE(text.find("label"), std::string::npos);
+  fs::remove(out);
+}
+
+}  // namespace
+}  // namespace objmap
