@@ -1,0 +1,124 @@
+// From a detection box to the object's pixels (paper Sec. III-B, last step): the non-plane
+// segments that lie mostly inside the (dilated) box.
+#include <algorithm>
+#include <cmath>
+
+#include "segmentation/segmenter.h"
+
+namespace objmap {
+namespace {
+
+struct SegmentStats {
+  int pixels = 0;
+  int inside = 0;
+  double sum_z = 0.0;
+  [[nodiscard]] float MeanZ() const {
+    return pixels > 0 ? static_cast<float>(sum_z / pixels) : 0.f;
+  }
+};
+
+struct PixelBox {
+  int u0, v0, u1, v1;  // inclusive
+  [[nodiscard]] float Area() const { return static_cast<float>((u1 - u0 + 1) * (v1 - v0 + 1)); }
+};
+
+PixelBox DilateAndClip(const BoundingBox2D& box, int width, int height,
+                       const DetectionSegmentConfig& config) {
+  const float grow_u = config.dilation_px + config.dilation_fraction * box.Width();
+  const float grow_v = config.dilation_px + config.dilation_fraction * box.Height();
+  auto clip = [](float x, int hi) {
+    return std::clamp(static_cast<int>(std::floor(x)), 0, hi - 1);
+  };
+  return {clip(box.x_min - grow_u, width), clip(box.y_min - grow_v, height),
+          clip(box.x_max + grow_u, width), clip(box.y_max + grow_v, height)};
+}
+
+std::vector<SegmentStats> CollectStats(const SegmentationResult& seg, const OrganizedCloud& cloud,
+                                       const PixelBox& box) {
+  std::vector<SegmentStats> stats(seg.num_segments);
+  for (int v = 0; v < seg.height; ++v) {
+    for (int u = 0; u < seg.width; ++u) {
+      const int i = v * seg.width + u;
+      const int s = seg.labels[i];
+      if (s < 0 || s >= seg.num_segments) continue;
+      stats[s].pixels++;
+      stats[s].sum_z += cloud.points_C[i].z();
+      if (u >= box.u0 && u <= box.u1 && v >= box.v0 && v <= box.v1) stats[s].inside++;
+    }
+  }
+  return stats;
+}
+
+// Segments whose `inside` share reaches `min_fraction`, plane and oversized ones excluded.
+std::vector<int> Candidates(const std::vector<SegmentStats>& stats, const SegmentationResult& seg,
+                            float box_area, float min_fraction,
+                            const DetectionSegmentConfig& config) {
+  std::vector<int> out;
+  for (int s = 0; s < static_cast<int>(stats.size()); ++s) {
+    const SegmentStats& st = stats[s];
+    if (seg.segment_is_plane[s] || st.pixels < config.min_segment_px) continue;
+    if (st.pixels > config.max_box_area_ratio * box_area) continue;
+    if (st.inside >= min_fraction * st.pixels && st.inside > 0) out.push_back(s);
+  }
+  return out;
+}
+
+int MostInside(const std::vector<int>& candidates, const std::vector<SegmentStats>& stats) {
+  return *std::max_element(candidates.begin(), candidates.end(),
+                           [&](int a, int b) { return stats[a].inside < stats[b].inside; });
+}
+
+}  // namespace
+
+bool DetectionSegmentConfig::IsValid(std::string* why) const {
+  auto fail = [why](const char* field) {
+    if (why) *why = std::string("DetectionSegmentConfig.") + field + " is out of range";
+    return false;
+  };
+  if (!(dilation_px >= 0.f)) return fail("dilation_px");
+  if (!(dilation_fraction >= 0.f)) return fail("dilation_fraction");
+  if (!(min_inside_fraction > 0.f && min_inside_fraction <= 1.f))
+    return fail("min_inside_fraction");
+  if (!(max_box_area_ratio > 0.f)) return fail("max_box_area_ratio");
+  if (min_segment_px < 0) return fail("min_segment_px");
+  if (!(depth_gate_m > 0.f)) return fail("depth_gate_m");
+  if (!(fallback_inside_fraction > 0.f && fallback_inside_fraction <= 1.f)) {
+    return fail("fallback_inside_fraction");
+  }
+  return true;
+}
+
+std::vector<int> SelectDetectionPixels(const SegmentationResult& segmentation,
+                                       const OrganizedCloud& cloud_C, const BoundingBox2D& box,
+                                       const DetectionSegmentConfig& config) {
+  const size_t n = static_cast<size_t>(segmentation.width) * segmentation.height;
+  if (!config.IsValid(nullptr) || n == 0 || segmentation.labels.size() != n ||
+      cloud_C.points_C.size() != n ||
+      segmentation.segment_is_plane.size() != static_cast<size_t>(segmentation.num_segments) ||
+      !(box.Area() > 0.f)) {
+    return {};
+  }
+  const PixelBox pixel_box = DilateAndClip(box, segmentation.width, segmentation.height, config);
+  const std::vector<SegmentStats> stats = CollectStats(segmentation, cloud_C, pixel_box);
+  std::vector<int> chosen =
+      Candidates(stats, segmentation, pixel_box.Area(), config.min_inside_fraction, config);
+  if (chosen.empty()) {
+    const std::vector<int> fallback =
+        Candidates(stats, segmentation, pixel_box.Area(), config.fallback_inside_fraction, config);
+    if (fallback.empty()) return {};
+    chosen = {MostInside(fallback, stats)};
+  }
+  // The segment with most pixels in the box is the object; others join when at its depth, so
+  // background bits seen past a chair or a cup do not.
+  const float main_z = stats[MostInside(chosen, stats)].MeanZ();
+  std::vector<bool> take(stats.size(), false);
+  for (int s : chosen) take[s] = std::abs(stats[s].MeanZ() - main_z) <= config.depth_gate_m;
+  std::vector<int> pixels;
+  for (size_t i = 0; i < n; ++i) {
+    const int s = segmentation.labels[i];
+    if (s >= 0 && s < segmentation.num_segments && take[s]) pixels.push_back(static_cast<int>(i));
+  }
+  return pixels;
+}
+
+}  // namespace objmap

@@ -1,0 +1,162 @@
+// Segmenter: normals -> supporting planes -> grid supervoxels -> weighted adjacency graph ->
+// Felzenszwalb-Huttenlocher (Kruskal) cut -> small-segment merge (paper Sec. III-B).
+#include "segmentation/segmenter.h"
+
+#include <algorithm>
+#include <numeric>
+
+#include "segmentation/segmentation_internal.h"
+
+namespace objmap {
+namespace {
+
+// Union-find over supervoxels with the segment size (pixels) and internal difference Int(C).
+class Components {
+ public:
+  explicit Components(const std::vector<seg::Supervoxel>& supervoxels)
+      : parent_(supervoxels.size()), pixels_(supervoxels.size()), internal_(supervoxels.size()) {
+    std::iota(parent_.begin(), parent_.end(), 0);
+    for (size_t i = 0; i < supervoxels.size(); ++i) pixels_[i] = supervoxels[i].pixels;
+  }
+  int Find(int x) {
+    while (parent_[x] != x) x = parent_[x] = parent_[parent_[x]];
+    return x;
+  }
+  void Unite(int a, int b, float weight) {
+    if (pixels_[a] < pixels_[b]) std::swap(a, b);
+    parent_[b] = a;
+    pixels_[a] += pixels_[b];
+    internal_[a] = std::max({internal_[a], internal_[b], weight});
+  }
+  int Pixels(int root) const { return pixels_[root]; }
+  float Threshold(int root, float k) const { return internal_[root] + k / pixels_[root]; }
+
+ private:
+  std::vector<int> parent_;
+  std::vector<int> pixels_;
+  std::vector<float> internal_;
+};
+
+// Kruskal over edges sorted by weight: merge when the edge is no heavier than both segments'
+// Int(C) + k / |C| (Felzenszwalb & Huttenlocher 2004), then absorb segments under the size floor.
+void CutGraph(std::vector<seg::GraphEdge>* edges, const SegmenterConfig& config,
+              Components* components) {
+  std::stable_sort(
+      edges->begin(), edges->end(),
+      [](const seg::GraphEdge& x, const seg::GraphEdge& y) { return x.weight < y.weight; });
+  for (const seg::GraphEdge& e : *edges) {
+    const int a = components->Find(e.a);
+    const int b = components->Find(e.b);
+    if (a == b) continue;
+    if (e.weight <= std::min(components->Threshold(a, config.kruskal_k_px),
+                             components->Threshold(b, config.kruskal_k_px))) {
+      components->Unite(a, b, e.weight);
+    }
+  }
+  for (const seg::GraphEdge& e : *edges) {
+    const int a = components->Find(e.a);
+    const int b = components->Find(e.b);
+    if (a == b) continue;
+    if (components->Pixels(a) < config.min_segment_px ||
+        components->Pixels(b) < config.min_segment_px) {
+      components->Unite(a, b, e.weight);
+    }
+  }
+}
+
+// Compact segment ids per pixel; a segment is a supporting plane when most of its pixels are.
+SegmentationResult Relabel(const OrganizedCloud& cloud, const std::vector<int>& supervoxel_of_pixel,
+                           const std::vector<seg::Supervoxel>& supervoxels,
+                           Components* components) {
+  SegmentationResult result;
+  result.width = cloud.width;
+  result.height = cloud.height;
+  result.labels.assign(cloud.size(), -1);
+  std::vector<int> segment_of_root(supervoxels.size(), -1);
+  std::vector<int> plane_pixels;
+  std::vector<int> all_pixels;
+  for (size_t s = 0; s < supervoxels.size(); ++s) {
+    const int root = components->Find(static_cast<int>(s));
+    if (segment_of_root[root] < 0) {
+      segment_of_root[root] = result.num_segments++;
+      plane_pixels.push_back(0);
+      all_pixels.push_back(0);
+    }
+    const int id = segment_of_root[root];
+    all_pixels[id] += supervoxels[s].pixels;
+    if (supervoxels[s].plane >= 0) plane_pixels[id] += supervoxels[s].pixels;
+  }
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    const int s = supervoxel_of_pixel[i];
+    if (s >= 0) result.labels[i] = segment_of_root[components->Find(s)];
+  }
+  result.segment_is_plane.resize(result.num_segments);
+  for (int id = 0; id < result.num_segments; ++id) {
+    result.segment_is_plane[id] = 2 * plane_pixels[id] > all_pixels[id];
+  }
+  return result;
+}
+
+// Fallback for an unusable config: every valid point in one non-plane segment.
+SegmentationResult SingleSegment(const OrganizedCloud& cloud) {
+  SegmentationResult result;
+  result.width = cloud.width;
+  result.height = cloud.height;
+  result.labels.assign(cloud.size(), -1);
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    if (cloud.IsValid(static_cast<int>(i))) result.labels[i] = 0;
+  }
+  result.num_segments = 1;
+  result.segment_is_plane = {false};
+  return result;
+}
+
+}  // namespace
+
+bool SegmenterConfig::IsValid(std::string* why) const {
+  auto fail = [why](const char* field) {
+    if (why) *why = std::string("SegmenterConfig.") + field + " is out of range";
+    return false;
+  };
+  if (!(depth_jump_ratio > 0.f)) return fail("depth_jump_ratio");
+  if (normal_step_px < 1 || normal_step_px > 32) return fail("normal_step_px");
+  if (max_planes < 0 || max_planes > 100) return fail("max_planes");
+  if (!(min_plane_area_m2 > 0.f)) return fail("min_plane_area_m2");
+  if (!(plane_distance_m > 0.f)) return fail("plane_distance_m");
+  if (!(plane_normal_angle_deg > 0.f && plane_normal_angle_deg < 90.f)) {
+    return fail("plane_normal_angle_deg");
+  }
+  if (plane_iterations < 1) return fail("plane_iterations");
+  if (cell_px < 1 || cell_px > 64) return fail("cell_px");
+  if (!(kruskal_k_px >= 0.f)) return fail("kruskal_k_px");
+  if (!(convex_tolerance >= 0.f)) return fail("convex_tolerance");
+  if (min_segment_px < 0) return fail("min_segment_px");
+  return true;
+}
+
+Segmenter::Segmenter(const SegmenterConfig& config) : config_(config) {}
+
+SegmentationResult Segmenter::Segment(const OrganizedCloud& cloud_C) const {
+  const size_t n = static_cast<size_t>(std::max(0, cloud_C.width)) * std::max(0, cloud_C.height);
+  if (n == 0 || cloud_C.points_C.size() != n) {
+    SegmentationResult empty;
+    empty.labels.assign(cloud_C.points_C.size(), -1);
+    return empty;
+  }
+  if (!config_.IsValid(nullptr)) return SingleSegment(cloud_C);
+  const std::vector<Eigen::Vector3f> normals =
+      seg::ComputeNormals(cloud_C, config_.normal_step_px, config_.depth_jump_ratio);
+  std::vector<std::int8_t> plane_of_pixel;
+  seg::DetectSupportingPlanes(cloud_C, normals, config_, &plane_of_pixel);
+  std::vector<int> supervoxel_of_pixel;
+  std::vector<seg::Supervoxel> supervoxels;
+  seg::BuildSupervoxels(cloud_C, normals, plane_of_pixel, config_, &supervoxel_of_pixel,
+                        &supervoxels);
+  std::vector<seg::GraphEdge> edges =
+      seg::BuildAdjacencyGraph(cloud_C, supervoxel_of_pixel, supervoxels, config_);
+  Components components(supervoxels);
+  CutGraph(&edges, config_, &components);
+  return Relabel(cloud_C, supervoxel_of_pixel, supervoxels, &components);
+}
+
+}  // namespace objmap
