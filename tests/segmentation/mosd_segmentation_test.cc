@@ -143,12 +143,16 @@ TEST(MosdSegmentationTest, MatchesGroundTruth) {
   const double recall = mean.recall / clouds;
   printf("MEAN over %d clouds: overseg %.2f  underseg %.2f  recall %.2f  %.1f ms/cloud\n", clouds,
          overseg, underseg, recall, mean.ms / clouds);
-  // Bounds: see the report in the commit that set them (measured values plus a margin).
-  EXPECT_LE(overseg, 1.0);
-  EXPECT_LE(underseg, 1.0);
-  EXPECT_GE(recall, 0.7);
+  // Bounds from the default config on the 14 learn clouds (measured: mean over-segmentation
+  // 0.00, mean under-segmentation 0.36 segments per cloud with at most 2, mean recall 0.94 with a
+  // worst cloud of 0.57), with a margin for platform differences; a regression that splits
+  // objects or glues them to the table or to each other breaks them. The worst recall comes from
+  // pots whose floor mOSD labels as a separate part while we keep it with the pot.
+  EXPECT_LE(overseg, 0.25);
+  EXPECT_LE(underseg, 0.75);
+  EXPECT_GE(recall, 0.85);
   EXPECT_LE(worst_under, 3);
-  EXPECT_GE(worst_recall, 0.3);
+  EXPECT_GE(worst_recall, 0.5);
 }
 
 TEST(MosdSegmentationTest, RealKitchenFrameSpeed) {

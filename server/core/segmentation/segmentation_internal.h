@@ -29,7 +29,16 @@ inline bool DepthContinuous(float z_a, float z_b, float ratio, int step_px) {
 /// Returns the number of planes found.
 int DetectSupportingPlanes(const OrganizedCloud& cloud_C,
                            const std::vector<Eigen::Vector3f>& normals,
-                           const SegmenterConfig& config, std::vector<std::int8_t>* plane_of_pixel);
+                           const SegmenterConfig& config, float focal_px,
+                           std::vector<std::int8_t>* plane_of_pixel);
+
+/// Metric area a pixel covers at `point_C` on a surface with unit normal `normal`.
+inline float PixelAreaM2(const Eigen::Vector3f& point_C, const Eigen::Vector3f& normal,
+                         float focal_px) {
+  // (z / f)^2 facing the camera, more when the surface is seen obliquely (capped at 4x).
+  const float cos_view = std::max(0.25f, std::abs(normal.dot(point_C)) / point_C.norm());
+  return point_C.z() * point_C.z() / (focal_px * focal_px * cos_view);
+}
 
 /// A group of connected pixels inside one image cell.
 struct Supervoxel {
@@ -38,6 +47,7 @@ struct Supervoxel {
   Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
   Eigen::Vector3f normal = Eigen::Vector3f::Zero();  ///< unit, facing the camera
   bool has_normal = false;
+  float area_m2 = 0.f;  ///< surface area covered by its pixels
 };
 
 /// Edge of the supervoxel adjacency graph with the paper's weight.
@@ -50,7 +60,8 @@ struct GraphEdge {
 /// Splits every cell of config.cell_px into depth-continuous pixel groups of one plane id.
 void BuildSupervoxels(const OrganizedCloud& cloud_C, const std::vector<Eigen::Vector3f>& normals,
                       const std::vector<std::int8_t>& plane_of_pixel, const SegmenterConfig& config,
-                      std::vector<int>* supervoxel_of_pixel, std::vector<Supervoxel>* supervoxels);
+                      float focal_px, std::vector<int>* supervoxel_of_pixel,
+                      std::vector<Supervoxel>* supervoxels);
 
 /// One edge per pair of supervoxels that touch without a depth discontinuity, weighted as in
 /// paper Sec. III-B.

@@ -10,6 +10,9 @@
 namespace objmap {
 namespace {
 
+// Used only when the cloud is too sparse to recover its focal length (Kinect-class sensors).
+constexpr float kFallbackFocalPx = 525.f;
+
 // Union-find over supervoxels with the segment size (pixels) and internal difference Int(C).
 class Components {
  public:
@@ -36,6 +39,36 @@ class Components {
   std::vector<int> pixels_;
   std::vector<float> internal_;
 };
+
+// Plane pieces connected to nothing big of their plane are object surfaces (a pot's floor lies
+// within the inlier distance of the table but is walled off from it by depth edges).
+void DropSmallPlanePatches(const SegmenterConfig& config, std::vector<seg::Supervoxel>* supervoxels,
+                           std::vector<seg::GraphEdge>* edges) {
+  std::vector<seg::Supervoxel>& svs = *supervoxels;
+  Components patches(svs);
+  for (const seg::GraphEdge& e : *edges) {
+    if (svs[e.a].plane < 0 || svs[e.a].plane != svs[e.b].plane) continue;
+    const int a = patches.Find(e.a);
+    const int b = patches.Find(e.b);
+    if (a != b) patches.Unite(a, b, 0.f);
+  }
+  std::vector<float> area_m2(svs.size(), 0.f);
+  for (size_t s = 0; s < svs.size(); ++s) {
+    if (svs[s].plane >= 0) area_m2[patches.Find(static_cast<int>(s))] += svs[s].area_m2;
+  }
+  bool changed = false;
+  for (size_t s = 0; s < svs.size(); ++s) {
+    if (svs[s].plane < 0) continue;
+    if (area_m2[patches.Find(static_cast<int>(s))] < config.min_plane_patch_area_m2) {
+      svs[s].plane = -1;
+      changed = true;
+    }
+  }
+  if (!changed) return;
+  for (seg::GraphEdge& e : *edges) {
+    e.weight = seg::EdgeWeight(svs[e.a], svs[e.b], config.convex_tolerance);
+  }
+}
 
 // Kruskal over edges sorted by weight: merge when the edge is no heavier than both segments'
 // Int(C) + k / |C| (Felzenszwalb & Huttenlocher 2004), then absorb segments under the size floor.
@@ -122,6 +155,7 @@ bool SegmenterConfig::IsValid(std::string* why) const {
   if (normal_step_px < 1 || normal_step_px > 32) return fail("normal_step_px");
   if (max_planes < 0 || max_planes > 100) return fail("max_planes");
   if (!(min_plane_area_m2 > 0.f)) return fail("min_plane_area_m2");
+  if (!(min_plane_patch_area_m2 >= 0.f)) return fail("min_plane_patch_area_m2");
   if (!(plane_distance_m > 0.f)) return fail("plane_distance_m");
   if (!(plane_normal_angle_deg > 0.f && plane_normal_angle_deg < 90.f)) {
     return fail("plane_normal_angle_deg");
@@ -146,14 +180,16 @@ SegmentationResult Segmenter::Segment(const OrganizedCloud& cloud_C) const {
   if (!config_.IsValid(nullptr)) return SingleSegment(cloud_C);
   const std::vector<Eigen::Vector3f> normals =
       seg::ComputeNormals(cloud_C, config_.normal_step_px, config_.depth_jump_ratio);
+  const float focal_px = seg::EstimateFocalPx(cloud_C, kFallbackFocalPx);
   std::vector<std::int8_t> plane_of_pixel;
-  seg::DetectSupportingPlanes(cloud_C, normals, config_, &plane_of_pixel);
+  seg::DetectSupportingPlanes(cloud_C, normals, config_, focal_px, &plane_of_pixel);
   std::vector<int> supervoxel_of_pixel;
   std::vector<seg::Supervoxel> supervoxels;
-  seg::BuildSupervoxels(cloud_C, normals, plane_of_pixel, config_, &supervoxel_of_pixel,
+  seg::BuildSupervoxels(cloud_C, normals, plane_of_pixel, config_, focal_px, &supervoxel_of_pixel,
                         &supervoxels);
   std::vector<seg::GraphEdge> edges =
       seg::BuildAdjacencyGraph(cloud_C, supervoxel_of_pixel, supervoxels, config_);
+  DropSmallPlanePatches(config_, &supervoxels, &edges);
   Components components(supervoxels);
   CutGraph(&edges, config_, &components);
   return Relabel(cloud_C, supervoxel_of_pixel, supervoxels, &components);

@@ -22,6 +22,9 @@ struct SegmenterConfig {
   /// A supporting plane must cover at least this area in m^2; smaller planar patches (box faces)
   /// stay ordinary surfaces.
   float min_plane_area_m2 = 0.12f;
+  /// A piece of a supporting plane cut off from the rest by depth edges (the floor of a pot, a
+  /// tray) is a supporting surface only when it covers at least this area in m^2.
+  float min_plane_patch_area_m2 = 0.025f;
   /// Plane inlier distance at 1 m depth, metres; grows with depth squared like Kinect noise.
   float plane_distance_m = 0.012f;
   /// Maximum angle in degrees between a pixel normal and the plane normal for plane inliers.

@@ -41,7 +41,7 @@ void FillSupervoxel(const OrganizedCloud& cloud, const std::vector<std::int8_t>&
 
 Supervoxel Summarize(const OrganizedCloud& cloud, const std::vector<Eigen::Vector3f>& normals,
                      const std::vector<std::int8_t>& plane_of_pixel,
-                     const std::vector<int>& members) {
+                     const std::vector<int>& members, float focal_px) {
   Supervoxel sv;
   sv.pixels = static_cast<int>(members.size());
   sv.plane = plane_of_pixel[members.front()];
@@ -54,6 +54,9 @@ Supervoxel Summarize(const OrganizedCloud& cloud, const std::vector<Eigen::Vecto
   const float norm = normal_sum.norm();
   sv.has_normal = norm > 0.f;
   if (sv.has_normal) sv.normal = normal_sum / norm;
+  const Eigen::Vector3f facing = sv.has_normal ? sv.normal : Eigen::Vector3f(-sv.centroid);
+  sv.area_m2 =
+      static_cast<float>(sv.pixels) * PixelAreaM2(sv.centroid, facing.normalized(), focal_px);
   return sv;
 }
 
@@ -61,7 +64,8 @@ Supervoxel Summarize(const OrganizedCloud& cloud, const std::vector<Eigen::Vecto
 
 void BuildSupervoxels(const OrganizedCloud& cloud_C, const std::vector<Eigen::Vector3f>& normals,
                       const std::vector<std::int8_t>& plane_of_pixel, const SegmenterConfig& config,
-                      std::vector<int>* supervoxel_of_pixel, std::vector<Supervoxel>* supervoxels) {
+                      float focal_px, std::vector<int>* supervoxel_of_pixel,
+                      std::vector<Supervoxel>* supervoxels) {
   supervoxel_of_pixel->assign(cloud_C.size(), -1);
   supervoxels->clear();
   std::vector<int> members;
@@ -76,7 +80,7 @@ void BuildSupervoxels(const OrganizedCloud& cloud_C, const std::vector<Eigen::Ve
           if ((*supervoxel_of_pixel)[i] >= 0 || !cloud_C.IsValid(i)) continue;
           FillSupervoxel(cloud_C, plane_of_pixel, cell, config.depth_jump_ratio, i,
                          static_cast<int>(supervoxels->size()), supervoxel_of_pixel, &members);
-          supervoxels->push_back(Summarize(cloud_C, normals, plane_of_pixel, members));
+          supervoxels->push_back(Summarize(cloud_C, normals, plane_of_pixel, members, focal_px));
         }
       }
     }

@@ -82,9 +82,7 @@ bool AssignPlane(const OrganizedCloud& cloud, const std::vector<Eigen::Vector3f>
     const Eigen::Vector3f& p = cloud.points_C[i];
     if (!normals[i].allFinite() || !inlier(plane, p, normals[i])) continue;
     members.push_back(static_cast<int>(i));
-    // A pixel covers (z / f)^2 facing the camera, more when the plane is seen obliquely.
-    const float cos_view = std::max(0.25f, std::abs(plane.normal.dot(p)) / p.norm());
-    area_m2 += p.z() * p.z() / (focal_px * focal_px * cos_view);
+    area_m2 += PixelAreaM2(p, plane.normal, focal_px);
   }
   if (area_m2 < min_area_m2) return false;
   for (int i : members) (*plane_of_pixel)[i] = static_cast<std::int8_t>(id);
@@ -95,7 +93,7 @@ bool AssignPlane(const OrganizedCloud& cloud, const std::vector<Eigen::Vector3f>
 
 int DetectSupportingPlanes(const OrganizedCloud& cloud_C,
                            const std::vector<Eigen::Vector3f>& normals,
-                           const SegmenterConfig& config,
+                           const SegmenterConfig& config, float focal_px,
                            std::vector<std::int8_t>* plane_of_pixel) {
   plane_of_pixel->assign(cloud_C.size(), -1);
   std::vector<int> samples;
@@ -107,7 +105,7 @@ int DetectSupportingPlanes(const OrganizedCloud& cloud_C,
   }
   const InlierTest inlier{config.plane_distance_m,
                           std::cos(config.plane_normal_angle_deg * kPi / 180.f)};
-  const float focal_px = EstimateFocalPx(cloud_C, 525.f);
+
   std::mt19937 rng(12345);  // fixed seed: the same cloud always gives the same planes
   int found = 0;
   while (found < config.max_planes && samples.size() >= 16) {
