@@ -5,6 +5,7 @@
 
 #include <map>
 
+#include "segmentation/segmentation_internal.h"
 #include "synthetic_scene.h"
 
 namespace objmap {
@@ -110,6 +111,32 @@ TEST_F(SyntheticSegmentationTest, BoxOnEmptyTableSelectsNothing) {
   const BoundingBox2D box{20.f, 400.f, 120.f, 470.f};  // bottom-left: table only
   EXPECT_TRUE(
       SelectDetectionPixels(result_, scene_.cloud_C, box, DetectionSegmentConfig()).empty());
+}
+
+seg::Supervoxel Patch(float x, float z, float normal_x) {
+  seg::Supervoxel sv;
+  sv.pixels = 64;
+  sv.centroid = Eigen::Vector3f(x, 0.f, z);
+  sv.normal = Eigen::Vector3f(normal_x, 0.f, -std::sqrt(1.f - normal_x * normal_x));
+  sv.has_normal = true;
+  return sv;
+}
+
+TEST(EdgeWeightTest, PaperWeightsWithConvexitySign) {
+  // Two patches 30 degrees off the viewing axis (n_i.n_j = 0.5). A ridge pointing at the camera
+  // (normals turned outwards) is convex: (1 - 0.5)^2; a valley is concave: 1 - 0.5.
+  const seg::Supervoxel ridge_left = Patch(-0.05f, 1.0f, -0.5f);
+  const seg::Supervoxel ridge_right = Patch(0.05f, 1.0f, 0.5f);
+  EXPECT_NEAR(seg::EdgeWeight(ridge_left, ridge_right, 0.05f), 0.25f, 1e-4f);
+  const seg::Supervoxel valley_left = Patch(-0.05f, 1.0f, 0.5f);
+  const seg::Supervoxel valley_right = Patch(0.05f, 1.0f, -0.5f);
+  EXPECT_NEAR(seg::EdgeWeight(valley_left, valley_right, 0.05f), 0.5f, 1e-4f);
+  seg::Supervoxel on_plane = ridge_left, on_same_plane = ridge_right, on_other_plane = ridge_right;
+  on_plane.plane = on_same_plane.plane = 0;
+  on_other_plane.plane = 1;
+  EXPECT_EQ(seg::EdgeWeight(on_plane, on_same_plane, 0.05f), 0.f);
+  EXPECT_EQ(seg::EdgeWeight(on_plane, on_other_plane, 0.05f), 1.f);
+  EXPECT_EQ(seg::EdgeWeight(on_plane, ridge_right, 0.05f), 1.f);
 }
 
 TEST(SegmenterTest, DegenerateInputGivesNoSegments) {

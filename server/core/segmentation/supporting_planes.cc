@@ -2,6 +2,7 @@
 // sequential RANSAC where one pixel and its normal form a hypothesis, refined by PCA; a plane is
 // kept only when its metric area is large, so box faces stay ordinary surfaces.
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -11,6 +12,8 @@ namespace objmap::seg {
 namespace {
 
 constexpr int kSampleStridePx = 6;
+// Hypotheses are scored on at most this many samples (the refit and labelling use all).
+constexpr size_t kMaxScoredSamples = 1500;
 constexpr float kPi = 3.14159265358979f;
 
 struct Plane {
@@ -52,17 +55,21 @@ bool FindPlane(const OrganizedCloud& cloud, const std::vector<Eigen::Vector3f>& 
                std::mt19937* rng, Plane* plane) {
   std::uniform_int_distribution<size_t> pick(0, samples.size() - 1);
   size_t best_count = 0;
+  const size_t stride = std::max<size_t>(1, samples.size() / kMaxScoredSamples);
   for (int it = 0; it < iterations; ++it) {
     const int seed = samples[pick(*rng)];
     Plane candidate{normals[seed], -normals[seed].dot(cloud.points_C[seed])};
     size_t count = 0;
-    for (int i : samples) count += inlier(candidate, cloud.points_C[i], normals[i]) ? 1 : 0;
+    for (size_t k = 0; k < samples.size(); k += stride) {
+      const int i = samples[k];
+      count += inlier(candidate, cloud.points_C[i], normals[i]) ? 1 : 0;
+    }
     if (count > best_count) {
       best_count = count;
       *plane = candidate;
     }
   }
-  if (best_count < 3) return false;
+  if (best_count < 3) return false;  // too few to refit
   std::vector<int> inliers;
   for (int i : samples) {
     if (inlier(*plane, cloud.points_C[i], normals[i])) inliers.push_back(i);
