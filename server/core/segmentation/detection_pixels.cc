@@ -1,5 +1,8 @@
 // From a detection box to the object's pixels (paper Sec. III-B, last step): the non-plane
-// segments that lie mostly inside the (dilated) box.
+// segments that lie mostly inside the (dilated) box. Among those, the segment whose own image
+// box best matches the detection is the object; others join only when they make the union match
+// the detection better, so an object occluding part of another (whose box then contains it) is
+// not taken along.
 #include <algorithm>
 #include <cmath>
 
@@ -8,24 +11,34 @@
 namespace objmap {
 namespace {
 
+struct PixelBox {
+  int u0, v0, u1, v1;  // inclusive
+  [[nodiscard]] float Area() const { return static_cast<float>((u1 - u0 + 1) * (v1 - v0 + 1)); }
+  [[nodiscard]] PixelBox Union(const PixelBox& o) const {
+    return {std::min(u0, o.u0), std::min(v0, o.v0), std::max(u1, o.u1), std::max(v1, o.v1)};
+  }
+  [[nodiscard]] float IoU(const PixelBox& o) const {
+    const int w = std::min(u1, o.u1) - std::max(u0, o.u0) + 1;
+    const int h = std::min(v1, o.v1) - std::max(v0, o.v0) + 1;
+    const float inter = w > 0 && h > 0 ? static_cast<float>(w * h) : 0.f;
+    return inter / (Area() + o.Area() - inter);
+  }
+};
+
 struct SegmentStats {
   int pixels = 0;
   int inside = 0;
   double sum_z = 0.0;
+  PixelBox extent{1 << 30, 1 << 30, -1, -1};
   [[nodiscard]] float MeanZ() const {
     return pixels > 0 ? static_cast<float>(sum_z / pixels) : 0.f;
   }
 };
 
-struct PixelBox {
-  int u0, v0, u1, v1;  // inclusive
-  [[nodiscard]] float Area() const { return static_cast<float>((u1 - u0 + 1) * (v1 - v0 + 1)); }
-};
-
-PixelBox DilateAndClip(const BoundingBox2D& box, int width, int height,
-                       const DetectionSegmentConfig& config) {
-  const float grow_u = config.dilation_px + config.dilation_fraction * box.Width();
-  const float grow_v = config.dilation_px + config.dilation_fraction * box.Height();
+PixelBox DilateAndClip(const BoundingBox2D& box, int width, int height, float dilation_px,
+                       float dilation_fraction) {
+  const float grow_u = dilation_px + dilation_fraction * box.Width();
+  const float grow_v = dilation_px + dilation_fraction * box.Height();
   auto clip = [](float x, int hi) {
     return std::clamp(static_cast<int>(std::floor(x)), 0, hi - 1);
   };
@@ -42,6 +55,7 @@ std::vector<SegmentStats> CollectStats(const SegmentationResult& seg, const Orga
       const int s = seg.labels[i];
       if (s < 0 || s >= seg.num_segments) continue;
       stats[s].pixels++;
+      stats[s].extent = stats[s].extent.Union({u, v, u, v});
       stats[s].sum_z += cloud.points_C[i].z();
       if (u >= box.u0 && u <= box.u1 && v >= box.v0 && v <= box.v1) stats[s].inside++;
     }
@@ -63,6 +77,32 @@ std::vector<int> Candidates(const std::vector<SegmentStats>& stats, const Segmen
   return out;
 }
 
+// Greedy: start from the best-matching segment, add segments at its depth while the union's
+// image box matches the detection box better by at least min_iou_gain.
+std::vector<int> BuildObject(const std::vector<int>& candidates,
+                             const std::vector<SegmentStats>& stats, const PixelBox& box,
+                             const DetectionSegmentConfig& config) {
+  const int main = *std::max_element(candidates.begin(), candidates.end(), [&](int a, int b) {
+    return stats[a].extent.IoU(box) < stats[b].extent.IoU(box);
+  });
+  std::vector<int> by_size = candidates;
+  std::sort(by_size.begin(), by_size.end(),
+            [&](int a, int b) { return stats[a].pixels > stats[b].pixels; });
+  std::vector<int> object = {main};
+  PixelBox extent = stats[main].extent;
+  for (int s : by_size) {
+    if (s == main || std::abs(stats[s].MeanZ() - stats[main].MeanZ()) > config.depth_gate_m) {
+      continue;
+    }
+    const PixelBox grown = extent.Union(stats[s].extent);
+    if (grown.IoU(box) >= extent.IoU(box) + config.min_iou_gain) {
+      object.push_back(s);
+      extent = grown;
+    }
+  }
+  return object;
+}
+
 int MostInside(const std::vector<int>& candidates, const std::vector<SegmentStats>& stats) {
   return *std::max_element(candidates.begin(), candidates.end(),
                            [&](int a, int b) { return stats[a].inside < stats[b].inside; });
@@ -82,6 +122,7 @@ bool DetectionSegmentConfig::IsValid(std::string* why) const {
   if (!(max_box_area_ratio > 0.f)) return fail("max_box_area_ratio");
   if (min_segment_px < 0) return fail("min_segment_px");
   if (!(depth_gate_m > 0.f)) return fail("depth_gate_m");
+  if (!(min_iou_gain >= 0.f)) return fail("min_iou_gain");
   if (!(fallback_inside_fraction > 0.f && fallback_inside_fraction <= 1.f)) {
     return fail("fallback_inside_fraction");
   }
@@ -98,7 +139,8 @@ std::vector<int> SelectDetectionPixels(const SegmentationResult& segmentation,
       !(box.Area() > 0.f)) {
     return {};
   }
-  const PixelBox pixel_box = DilateAndClip(box, segmentation.width, segmentation.height, config);
+  const PixelBox pixel_box = DilateAndClip(box, segmentation.width, segmentation.height,
+                                           config.dilation_px, config.dilation_fraction);
   const std::vector<SegmentStats> stats = CollectStats(segmentation, cloud_C, pixel_box);
   std::vector<int> chosen =
       Candidates(stats, segmentation, pixel_box.Area(), config.min_inside_fraction, config);
@@ -108,11 +150,10 @@ std::vector<int> SelectDetectionPixels(const SegmentationResult& segmentation,
     if (fallback.empty()) return {};
     chosen = {MostInside(fallback, stats)};
   }
-  // The segment with most pixels in the box is the object; others join when at its depth, so
-  // background bits seen past a chair or a cup do not.
-  const float main_z = stats[MostInside(chosen, stats)].MeanZ();
+  const PixelBox detection_box =
+      DilateAndClip(box, segmentation.width, segmentation.height, 0.f, 0.f);
   std::vector<bool> take(stats.size(), false);
-  for (int s : chosen) take[s] = std::abs(stats[s].MeanZ() - main_z) <= config.depth_gate_m;
+  for (int s : BuildObject(chosen, stats, detection_box, config)) take[s] = true;
   std::vector<int> pixels;
   for (size_t i = 0; i < n; ++i) {
     const int s = segmentation.labels[i];

@@ -83,6 +83,10 @@ struct DetectionSegmentConfig {
   /// Extra segments join the main one only when their mean depth is within this many metres
   /// (they are further parts of one object, not background seen through the box).
   float depth_gate_m = 0.5f;
+  /// A further segment joins the object only when it raises the IoU between the object's image
+  /// box and the detection box by at least this much (parts of a chair do; an object in front,
+  /// already inside the box, does not).
+  float min_iou_gain = 0.02f;
   /// When nothing passes min_inside_fraction, the largest non-plane segment with at least this
   /// fraction inside is returned alone.
   float fallback_inside_fraction = 0.5f;
