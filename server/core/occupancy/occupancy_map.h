@@ -19,6 +19,9 @@ struct OccupancyConfig {
   double probability_miss = 0.4;
   double clamping_min = 0.1192;
   double clamping_max = 0.971;
+  /// Object rays stop this many voxels short of the object point, so object surfaces do not
+  /// carve the structure they rest on.
+  int object_margin_voxels = 2;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
@@ -38,6 +41,15 @@ struct OccupancyCounts {
   std::size_t free = 0;
 };
 
+/// What the last Integrate() did; for benchmarks and logs.
+struct IntegrationStats {
+  std::size_t rays = 0;             ///< rays cast (structure + object points)
+  std::size_t free_voxels = 0;      ///< distinct voxels updated as free
+  std::size_t occupied_voxels = 0;  ///< distinct voxels updated as occupied
+  double cast_ms = 0.0;             ///< ray casting into the scan's voxel set
+  double tree_update_ms = 0.0;      ///< applying the updates to the OcTree
+};
+
 /// Thread-safety: none. Callers serialize Integrate() against queries.
 class OccupancyMap {
  public:
@@ -47,8 +59,10 @@ class OccupancyMap {
   OccupancyMap& operator=(OccupancyMap&&) noexcept;
 
   /// Ray-casts every point from the origin: cells on the way become more free, structure
-  /// endpoints more occupied.
+  /// endpoints more occupied. Same result as octomap::OcTree::insertPointCloud (each voxel gets
+  /// at most one update per scan, occupied wins over free); non-finite points are skipped.
   void Integrate(const ScanW& scan);
+  [[nodiscard]] const IntegrationStats& last_stats() const;
 
   [[nodiscard]] VoxelState Query(const Eigen::Vector3d& point_W) const;
   [[nodiscard]] OccupancyCounts Counts() const;

@@ -1,0 +1,218 @@
+#include "occupancy/free_space_grid.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace objmap::occupancy_internal {
+namespace {
+
+constexpr int kBrickShift = 3;                         // 8 voxels per brick edge
+constexpr int kBrickDepth = kTreeDepth - kBrickShift;  // octree depth of one brick (13)
+constexpr std::uint64_t kAllOnes = ~std::uint64_t{0};
+
+double KeyToCoord(int key, double resolution_m) {
+  return (static_cast<double>(key - kKeyOffset) + 0.5) * resolution_m;
+}
+
+// Combines child states: all full -> full, all empty -> empty, otherwise mixed.
+struct StateAccumulator {
+  bool any_set = false;
+  bool all_full = true;
+  void Add(BlockState s) {
+    any_set |= s != BlockState::kEmpty;
+    all_full &= s == BlockState::kFull;
+  }
+  [[nodiscard]] BlockState Result() const {
+    if (all_full) return BlockState::kFull;
+    return any_set ? BlockState::kMixed : BlockState::kEmpty;
+  }
+};
+
+}  // namespace
+
+bool PointToKey(const Eigen::Vector3f& point, double resolution_m, VoxelKey* key) {
+  const double factor = 1.0 / resolution_m;
+  for (int i = 0; i < 3; ++i) {
+    const double scaled = std::floor(factor * static_cast<double>(point[i]));
+    if (!(scaled >= -kKeyOffset && scaled < kKeyOffset)) return false;  // also rejects NaN
+    (*key)[i] = static_cast<std::uint16_t>(static_cast<int>(scaled) + kKeyOffset);
+  }
+  return true;
+}
+
+void FreeSpaceGrid::Reset(const VoxelKey& min_key, const VoxelKey& max_key) {
+  for (int i = 0; i < 3; ++i) {
+    lo_[i] = (min_key[i] >> kBrickShift) - 1;
+    dims_[i] = (max_key[i] >> kBrickShift) + 1 - lo_[i] + 1;
+  }
+  cell_to_brick_.assign(static_cast<std::size_t>(dims_[0]) * dims_[1] * dims_[2], -1);
+  bricks_.clear();
+  levels_.clear();
+}
+
+std::int64_t FreeSpaceGrid::BrickCell(const VoxelKey& key) const {
+  const int bx = (key[0] >> kBrickShift) - lo_[0];
+  const int by = (key[1] >> kBrickShift) - lo_[1];
+  const int bz = (key[2] >> kBrickShift) - lo_[2];
+  if (bx < 0 || by < 0 || bz < 0 || bx >= dims_[0] || by >= dims_[1] || bz >= dims_[2]) {
+    return -1;
+  }
+  return (static_cast<std::int64_t>(bz) * dims_[1] + by) * dims_[0] + bx;
+}
+
+FreeSpaceGrid::Brick& FreeSpaceGrid::BrickAt(const VoxelKey& key) {
+  const std::int64_t cell = BrickCell(key);
+  std::int32_t& index = cell_to_brick_[static_cast<std::size_t>(cell)];
+  if (index < 0) {
+    index = static_cast<std::int32_t>(bricks_.size());
+    bricks_.push_back(Brick{});
+  }
+  return bricks_[static_cast<std::size_t>(index)];
+}
+
+void FreeSpaceGrid::AddRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& end) {
+  VoxelKey key_origin, key_end;
+  if (!PointToKey(origin, resolution_m_, &key_origin) ||
+      !PointToKey(end, resolution_m_, &key_end) || key_origin == key_end) {
+    return;
+  }
+  // Float direction and length, double traversal parameters: the arithmetic of
+  // OcTree::computeRayKeys (Amanatides & Woo), so the voxel sets agree bit for bit.
+  Eigen::Vector3f direction = end - origin;
+  const float length = static_cast<float>(std::sqrt(static_cast<double>(
+      direction[0] * direction[0] + direction[1] * direction[1] + direction[2] * direction[2])));
+  direction /= length;
+  int step[3];
+  double t_max[3], t_delta[3];
+  for (int i = 0; i < 3; ++i) {
+    step[i] = direction[i] > 0.0f ? 1 : (direction[i] < 0.0f ? -1 : 0);
+    if (step[i] == 0) {
+      t_max[i] = t_delta[i] = std::numeric_limits<double>::max();
+      continue;
+    }
+    double border = KeyToCoord(key_origin[i], resolution_m_);
+    border += static_cast<float>(step[i] * resolution_m_ * 0.5);
+    t_max[i] = (border - static_cast<double>(origin[i])) / static_cast<double>(direction[i]);
+    t_delta[i] = resolution_m_ / std::fabs(static_cast<double>(direction[i]));
+  }
+  VoxelKey key = key_origin;
+  Brick* brick = &BrickAt(key);
+  int brick_id[3] = {key[0] >> kBrickShift, key[1] >> kBrickShift, key[2] >> kBrickShift};
+  while (true) {
+    (*brick)[key[2] & 7] |= std::uint64_t{1} << ((key[0] & 7) + 8 * (key[1] & 7));
+    int dim;
+    if (t_max[0] < t_max[1]) {
+      dim = t_max[0] < t_max[2] ? 0 : 2;
+    } else {
+      dim = t_max[1] < t_max[2] ? 1 : 2;
+    }
+    key[dim] = static_cast<std::uint16_t>(key[dim] + step[dim]);
+    t_max[dim] += t_delta[dim];
+    if (key == key_end) return;
+    if (std::min(std::min(t_max[0], t_max[1]), t_max[2]) > length) return;
+    if ((key[dim] >> kBrickShift) != brick_id[dim]) {
+      brick_id[dim] = key[dim] >> kBrickShift;
+      brick = &BrickAt(key);
+    }
+  }
+}
+
+void FreeSpaceGrid::Clear(const VoxelKey& key) {
+  const std::int64_t cell = BrickCell(key);
+  if (cell < 0 || cell_to_brick_[static_cast<std::size_t>(cell)] < 0) return;
+  Brick& brick = bricks_[static_cast<std::size_t>(cell_to_brick_[static_cast<std::size_t>(cell)])];
+  brick[key[2] & 7] &= ~(std::uint64_t{1} << ((key[0] & 7) + 8 * (key[1] & 7)));
+}
+
+bool FreeSpaceGrid::Test(const VoxelKey& key) const {
+  return SubBrickState(kTreeDepth, key) == BlockState::kFull;
+}
+
+BlockState FreeSpaceGrid::SubBrickState(int depth, const VoxelKey& key) const {
+  const std::int64_t cell = BrickCell(key);
+  if (cell < 0 || cell_to_brick_[static_cast<std::size_t>(cell)] < 0) return BlockState::kEmpty;
+  const Brick& brick =
+      bricks_[static_cast<std::size_t>(cell_to_brick_[static_cast<std::size_t>(cell)])];
+  const int size = 1 << (kTreeDepth - depth);  // 1, 2, 4 or 8 voxels per edge
+  const int x0 = key[0] & 7 & ~(size - 1), y0 = key[1] & 7 & ~(size - 1);
+  const int z0 = key[2] & 7 & ~(size - 1);
+  std::uint64_t mask = 0;
+  const std::uint64_t row = (size == 8) ? 0xFF : ((std::uint64_t{1} << size) - 1);
+  for (int y = 0; y < size; ++y) mask |= row << (x0 + 8 * (y0 + y));
+  StateAccumulator acc;
+  for (int z = z0; z < z0 + size; ++z) {
+    const std::uint64_t bits = brick[z] & mask;
+    acc.Add(bits == mask ? BlockState::kFull
+                         : (bits == 0 ? BlockState::kEmpty : BlockState::kMixed));
+  }
+  return acc.Result();
+}
+
+void FreeSpaceGrid::BuildPyramid() {
+  levels_.assign(kBrickDepth + 1, {});
+  level_lo_.assign(kBrickDepth + 1, {});
+  level_dims_.assign(kBrickDepth + 1, {});
+  for (int level = 0; level <= kBrickDepth; ++level) BuildLevel(level);
+}
+
+void FreeSpaceGrid::BuildLevel(int level) {
+  std::array<int, 3>& lo = level_lo_[level];
+  std::array<int, 3>& dims = level_dims_[level];
+  for (int i = 0; i < 3; ++i) {
+    lo[i] = lo_[i] >> level;
+    dims[i] = ((lo_[i] + dims_[i] - 1) >> level) - lo[i] + 1;
+  }
+  std::vector<BlockState>& states = levels_[level];
+  states.assign(static_cast<std::size_t>(dims[0]) * dims[1] * dims[2], BlockState::kEmpty);
+  for (int z = 0; z < dims[2]; ++z) {
+    for (int y = 0; y < dims[1]; ++y) {
+      for (int x = 0; x < dims[0]; ++x) {
+        // A cell at `level` covers the node whose brick coordinates, shifted, equal its own.
+        const int shift = kBrickShift + level;
+        const VoxelKey key = {static_cast<std::uint16_t>((lo[0] + x) << shift),
+                              static_cast<std::uint16_t>((lo[1] + y) << shift),
+                              static_cast<std::uint16_t>((lo[2] + z) << shift)};
+        BlockState state = BlockState::kEmpty;
+        if (level == 0) {
+          state = SubBrickState(kBrickDepth, key);
+        } else {
+          StateAccumulator acc;
+          const int half = 1 << (shift - 1);
+          for (int c = 0; c < 8; ++c) {
+            const VoxelKey child = {static_cast<std::uint16_t>(key[0] + ((c & 1) ? half : 0)),
+                                    static_cast<std::uint16_t>(key[1] + ((c & 2) ? half : 0)),
+                                    static_cast<std::uint16_t>(key[2] + ((c & 4) ? half : 0))};
+            acc.Add(State(kBrickDepth - level + 1, child));
+          }
+          state = acc.Result();
+        }
+        states[(static_cast<std::size_t>(z) * dims[1] + y) * dims[0] + x] = state;
+      }
+    }
+  }
+}
+
+BlockState FreeSpaceGrid::State(int depth, const VoxelKey& key) const {
+  if (depth > kBrickDepth) return SubBrickState(depth, key);
+  const int level = kBrickDepth - depth;
+  const int shift = kBrickShift + level;
+  const std::array<int, 3>& lo = level_lo_[level];
+  const std::array<int, 3>& dims = level_dims_[level];
+  int c[3];
+  for (int i = 0; i < 3; ++i) {
+    c[i] = (key[i] >> shift) - lo[i];
+    if (c[i] < 0 || c[i] >= dims[i]) return BlockState::kEmpty;
+  }
+  return levels_[level][(static_cast<std::size_t>(c[2]) * dims[1] + c[1]) * dims[0] + c[0]];
+}
+
+std::size_t FreeSpaceGrid::CountSet() const {
+  std::size_t count = 0;
+  for (const Brick& brick : bricks_) {
+    for (std::uint64_t word : brick) count += static_cast<std::size_t>(__builtin_popcountll(word));
+  }
+  return count;
+}
+
+}  // namespace objmap::occupancy_internal

@@ -1,0 +1,78 @@
+#pragma once
+// Internal to the occupancy module: the set of voxels one scan observes as free, kept as a
+// bitmap of 8x8x8 bricks over the scan's bounding box, with a pyramid that says for each octree
+// node whether it is empty, partly or fully free. The pyramid lets the OcTree update write whole
+// free blocks at coarse depths instead of one leaf at a time.
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace objmap::occupancy_internal {
+
+/// OctoMap's key space: 16 levels, keys in [0, 65536) with the origin at 32768.
+inline constexpr int kTreeDepth = 16;
+inline constexpr int kKeyOffset = 32768;
+
+using VoxelKey = std::array<std::uint16_t, 3>;
+
+/// Same discretization as OcTree::coordToKeyChecked; false outside the key range.
+[[nodiscard]] bool PointToKey(const Eigen::Vector3f& point, double resolution_m, VoxelKey* key);
+
+[[nodiscard]] inline std::uint64_t PackKey(const VoxelKey& k) {
+  return (std::uint64_t{k[0]} << 32) | (std::uint64_t{k[1]} << 16) | k[2];
+}
+[[nodiscard]] inline VoxelKey UnpackKey(std::uint64_t packed) {
+  return {static_cast<std::uint16_t>(packed >> 32), static_cast<std::uint16_t>(packed >> 16),
+          static_cast<std::uint16_t>(packed)};
+}
+
+enum class BlockState : std::uint8_t { kEmpty = 0, kMixed = 1, kFull = 2 };
+
+/// Thread-safety: none; one grid per integrating thread.
+class FreeSpaceGrid {
+ public:
+  explicit FreeSpaceGrid(double resolution_m) : resolution_m_(resolution_m) {}
+
+  /// Empties the grid and sizes it for keys in [min_key, max_key] (padded by one brick).
+  void Reset(const VoxelKey& min_key, const VoxelKey& max_key);
+
+  /// Marks the voxels the segment origin->end crosses, excluding the end voxel: the 3D-DDA of
+  /// OcTree::computeRayKeys with the same float/double arithmetic, so the sets match exactly.
+  /// Both ends must lie inside the Reset() box.
+  void AddRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& end);
+
+  void Clear(const VoxelKey& key);
+  [[nodiscard]] bool Test(const VoxelKey& key) const;
+
+  /// Builds the per-depth summaries; call after the last AddRay/Clear.
+  void BuildPyramid();
+
+  /// State of the octree node at `depth` (0 = root, 16 = leaf) that contains `key`.
+  [[nodiscard]] BlockState State(int depth, const VoxelKey& key) const;
+
+  /// Number of set voxels (after BuildPyramid it is cheap enough for statistics).
+  [[nodiscard]] std::size_t CountSet() const;
+
+ private:
+  using Brick = std::array<std::uint64_t, 8>;  // one word per z slice, bit = x + 8 * y
+
+  [[nodiscard]] std::int64_t BrickCell(const VoxelKey& key) const;
+  Brick& BrickAt(const VoxelKey& key);
+  [[nodiscard]] BlockState SubBrickState(int depth, const VoxelKey& key) const;
+  void BuildLevel(int level);
+
+  double resolution_m_;
+  std::array<int, 3> lo_ = {0, 0, 0};        // brick coordinates (key >> 3) of the first cell
+  std::array<int, 3> dims_ = {0, 0, 0};      // cells per axis
+  std::vector<std::int32_t> cell_to_brick_;  // -1 where no voxel is set
+  std::vector<std::int64_t> used_cells_;
+  std::vector<Brick> bricks_;
+  // levels_[L] summarizes nodes at depth 13 - L; dims and origins per level.
+  std::vector<std::vector<BlockState>> levels_;
+  std::vector<std::array<int, 3>> level_lo_;
+  std::vector<std::array<int, 3>> level_dims_;
+};
+
+}  // namespace objmap::occupancy_internal

@@ -1,0 +1,215 @@
+#include "occupancy/occupancy_map.h"
+
+#include <octomap/OcTree.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <utility>
+
+#include "occupancy/batch_octree.h"
+#include "occupancy/free_space_grid.h"
+
+namespace objmap {
+namespace {
+
+using occupancy_internal::BatchOcTree;
+using occupancy_internal::FreeSpaceGrid;
+using occupancy_internal::PackKey;
+using occupancy_internal::PointToKey;
+using occupancy_internal::UnpackKey;
+using occupancy_internal::VoxelKey;
+using Clock = std::chrono::steady_clock;
+
+double MsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+bool IsProbability(double p) { return std::isfinite(p) && p > 0.0 && p < 1.0; }
+
+// Where the free-space ray of one point ends, following OcTree::computeUpdate: rays longer than
+// max_range stop at max_range (float arithmetic as OctoMap, for identical voxel sets).
+struct RayEnd {
+  Eigen::Vector3f end_W;
+  bool in_range = false;  // true when the point itself is within max_range
+};
+
+RayEnd ClipRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& point, double max_range_m) {
+  const Eigen::Vector3f d = point - origin;
+  const double norm = std::sqrt(static_cast<double>(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+  if (max_range_m < 0.0 || norm <= max_range_m) return {point, true};
+  const Eigen::Vector3f direction = d / static_cast<float>(norm);
+  return {origin + direction * static_cast<float>(max_range_m), false};
+}
+
+bool AllFinite(const Eigen::Vector3f& p) { return p.allFinite(); }
+
+}  // namespace
+
+bool OccupancyConfig::IsValid(std::string* why) const {
+  auto fail = [why](const char* message) {
+    if (why != nullptr) *why = message;
+    return false;
+  };
+  if (!(std::isfinite(resolution_m) && resolution_m > 0.0)) {
+    return fail("resolution_m must be finite and > 0");
+  }
+  if (std::isnan(max_range_m) || max_range_m == 0.0) {
+    return fail("max_range_m must be > 0 (or negative for no limit)");
+  }
+  if (!IsProbability(probability_hit) || probability_hit <= 0.5) {
+    return fail("probability_hit must lie in (0.5, 1)");
+  }
+  if (!IsProbability(probability_miss) || probability_miss >= 0.5) {
+    return fail("probability_miss must lie in (0, 0.5)");
+  }
+  if (!IsProbability(clamping_min) || !IsProbability(clamping_max) ||
+      clamping_min >= clamping_max) {
+    return fail("clamping_min/clamping_max must lie in (0, 1) with clamping_min < clamping_max");
+  }
+  if (object_margin_voxels < 0) return fail("object_margin_voxels must be >= 0");
+  return true;
+}
+
+struct OccupancyMap::Impl {
+  explicit Impl(const OccupancyConfig& c) : config(c), tree(c.resolution_m), grid(c.resolution_m) {
+    tree.setProbHit(c.probability_hit);
+    tree.setProbMiss(c.probability_miss);
+    tree.setClampingThresMin(c.clamping_min);
+    tree.setClampingThresMax(c.clamping_max);
+  }
+
+  void CollectRays(const ScanW& scan);
+  void CastRays(const Eigen::Vector3f& origin, const VoxelKey& origin_key);
+  void ApplyOccupied();
+
+  OccupancyConfig config;
+  BatchOcTree tree;
+  FreeSpaceGrid grid;
+  IntegrationStats stats;
+  // Scratch, kept between scans to avoid reallocations.
+  std::vector<Eigen::Vector3f> ray_ends_W;
+  std::vector<std::uint64_t> occupied_keys;
+  VoxelKey min_key{}, max_key{};
+};
+
+// Turns the scan's points into free-space ray ends and occupied endpoint keys, and the key box.
+void OccupancyMap::Impl::CollectRays(const ScanW& scan) {
+  ray_ends_W.clear();
+  occupied_keys.clear();
+  const Eigen::Vector3f& origin = scan.origin_W;
+  const float margin_m = static_cast<float>(config.object_margin_voxels * config.resolution_m);
+  for (const Eigen::Vector3f& p : scan.structure_points_W) {
+    if (!AllFinite(p)) continue;
+    const RayEnd ray = ClipRay(origin, p, config.max_range_m);
+    VoxelKey key;
+    if (ray.in_range && PointToKey(p, config.resolution_m, &key)) {
+      occupied_keys.push_back(PackKey(key));
+    }
+    ray_ends_W.push_back(ray.end_W);
+  }
+  for (const Eigen::Vector3f& p : scan.object_points_W) {
+    if (!AllFinite(p)) continue;
+    RayEnd ray = ClipRay(origin, p, config.max_range_m);
+    if (ray.in_range) {
+      // Stop short of the object surface so it does not erase the structure it touches.
+      const Eigen::Vector3f d = p - origin;
+      const float length = d.norm();
+      if (length <= margin_m) continue;
+      ray.end_W = p - d * (margin_m / length);
+    }
+    ray_ends_W.push_back(ray.end_W);
+  }
+  std::sort(occupied_keys.begin(), occupied_keys.end());
+  occupied_keys.erase(std::unique(occupied_keys.begin(), occupied_keys.end()), occupied_keys.end());
+}
+
+void OccupancyMap::Impl::CastRays(const Eigen::Vector3f& origin, const VoxelKey& origin_key) {
+  min_key = max_key = origin_key;
+  std::size_t kept = 0;
+  for (const Eigen::Vector3f& end : ray_ends_W) {
+    VoxelKey key;
+    if (!PointToKey(end, config.resolution_m, &key)) continue;
+    for (int i = 0; i < 3; ++i) {
+      min_key[i] = std::min(min_key[i], key[i]);
+      max_key[i] = std::max(max_key[i], key[i]);
+    }
+    ray_ends_W[kept++] = end;
+  }
+  ray_ends_W.resize(kept);
+  grid.Reset(min_key, max_key);
+  for (const Eigen::Vector3f& end : ray_ends_W) grid.AddRay(origin, end);
+  // Occupied endpoints win over free space seen in the same scan (as OcTree::computeUpdate).
+  for (std::uint64_t packed : occupied_keys) grid.Clear(UnpackKey(packed));
+  grid.BuildPyramid();
+}
+
+void OccupancyMap::Impl::ApplyOccupied() {
+  for (std::uint64_t packed : occupied_keys) {
+    const VoxelKey k = UnpackKey(packed);
+    tree.updateNode(octomap::OcTreeKey(k[0], k[1], k[2]), true, /*lazy_eval=*/false);
+  }
+}
+
+OccupancyMap::OccupancyMap(const OccupancyConfig& config) : impl_(std::make_unique<Impl>(config)) {}
+OccupancyMap::~OccupancyMap() = default;
+OccupancyMap::OccupancyMap(OccupancyMap&&) noexcept = default;
+OccupancyMap& OccupancyMap::operator=(OccupancyMap&&) noexcept = default;
+
+void OccupancyMap::Integrate(const ScanW& scan) {
+  Impl& m = *impl_;
+  m.stats = IntegrationStats{};
+  VoxelKey origin_key;
+  // Like OctoMap, an origin outside the key range casts no rays and marks nothing.
+  if (!AllFinite(scan.origin_W) || !PointToKey(scan.origin_W, m.config.resolution_m, &origin_key)) {
+    return;
+  }
+  const Clock::time_point start = Clock::now();
+  m.CollectRays(scan);
+  m.CastRays(scan.origin_W, origin_key);
+  m.stats.rays = m.ray_ends_W.size();
+  m.stats.occupied_voxels = m.occupied_keys.size();
+  m.stats.cast_ms = MsSince(start);
+  const Clock::time_point update_start = Clock::now();
+  m.tree.ApplyFreeSpace(m.grid);
+  m.ApplyOccupied();
+  m.stats.tree_update_ms = MsSince(update_start);
+}
+
+const IntegrationStats& OccupancyMap::last_stats() const { return impl_->stats; }
+
+VoxelState OccupancyMap::Query(const Eigen::Vector3d& point_W) const {
+  octomap::OcTreeKey key;
+  if (!point_W.allFinite() ||
+      !impl_->tree.coordToKeyChecked(
+          octomap::point3d(static_cast<float>(point_W.x()), static_cast<float>(point_W.y()),
+                           static_cast<float>(point_W.z())),
+          key)) {
+    return VoxelState::kUnknown;
+  }
+  const octomap::OcTreeNode* node = impl_->tree.search(key);
+  if (node == nullptr) return VoxelState::kUnknown;
+  return impl_->tree.isNodeOccupied(node) ? VoxelState::kOccupied : VoxelState::kFree;
+}
+
+OccupancyCounts OccupancyMap::Counts() const {
+  OccupancyCounts counts;
+  const BatchOcTree& tree = impl_->tree;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    const std::size_t leaves = std::size_t{1} << (3 * (tree.getTreeDepth() - it.getDepth()));
+    (tree.isNodeOccupied(*it) ? counts.occupied : counts.free) += leaves;
+  }
+  return counts;
+}
+
+bool OccupancyMap::WriteBinary(const std::string& path, std::string* why) const {
+  if (impl_->tree.writeBinaryConst(path)) return true;
+  if (why != nullptr) *why = "could not write OctoMap binary file " + path;
+  return false;
+}
+
+void OccupancyMap::Clear() { impl_->tree.clear(); }
+
+const OccupancyConfig& OccupancyMap::config() const { return impl_->config; }
+
+}  // namespace objmap

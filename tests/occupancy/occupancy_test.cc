@@ -1,0 +1,222 @@
+#include <gtest/gtest.h>
+#include <octomap/OcTree.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <set>
+#include <string>
+#include <tuple>
+
+#include "occupancy/occupancy_map.h"
+#include "occupancy/octree_compare.h"
+
+namespace objmap {
+namespace {
+
+using Vec3d = Eigen::Vector3d;
+
+OccupancyConfig TestConfig() {
+  OccupancyConfig config;
+  config.resolution_m = 0.01;
+  config.max_range_m = 4.0;
+  return config;
+}
+
+// Voxel centres are at (k + 0.5) cm; points 5 mm off the grid lines avoid ties on cell borders.
+ScanW WallScan(double x_m, double half_extent_m) {
+  ScanW scan;
+  for (double y = -half_extent_m; y <= half_extent_m + 1e-9; y += 0.005) {
+    for (double z = -half_extent_m; z <= half_extent_m + 1e-9; z += 0.005) {
+      scan.structure_points_W.emplace_back(x_m, y + 0.0025, z + 0.0025);
+    }
+  }
+  return scan;
+}
+
+TEST(OccupancyConfig, IsValidNamesTheBadField) {
+  std::string why;
+  EXPECT_TRUE(OccupancyConfig{}.IsValid(&why));
+  OccupancyConfig config;
+  config.resolution_m = 0.0;
+  EXPECT_FALSE(config.IsValid(&why));
+  EXPECT_NE(why.find("resolution_m"), std::string::npos);
+  config = OccupancyConfig{};
+  config.probability_miss = 0.7;
+  EXPECT_FALSE(config.IsValid(&why));
+  EXPECT_NE(why.find("probability_miss"), std::string::npos);
+  config = OccupancyConfig{};
+  config.object_margin_voxels = -1;
+  EXPECT_FALSE(config.IsValid(&why));
+  EXPECT_NE(why.find("object_margin_voxels"), std::string::npos);
+}
+
+TEST(OccupancyMap, SingleRayFreeAlongOccupiedAtEndUnknownElsewhere) {
+  OccupancyMap map(TestConfig());
+  ScanW scan;
+  scan.structure_points_W.emplace_back(0.505f, 0.005f, 0.005f);
+  map.Integrate(scan);
+  EXPECT_EQ(map.Query(Vec3d(0.505, 0.005, 0.005)), VoxelState::kOccupied);
+  for (double x = 0.005; x < 0.5; x += 0.01) {
+    EXPECT_EQ(map.Query(Vec3d(x, 0.005, 0.005)), VoxelState::kFree) << "x=" << x;
+  }
+  EXPECT_EQ(map.Query(Vec3d(0.515, 0.005, 0.005)), VoxelState::kUnknown);
+  EXPECT_EQ(map.Query(Vec3d(1.0, 0.005, 0.005)), VoxelState::kUnknown);
+  EXPECT_EQ(map.Query(Vec3d(0.25, 0.015, 0.005)), VoxelState::kUnknown);
+  EXPECT_EQ(map.Query(Vec3d(0.25, 0.005, -0.005)), VoxelState::kUnknown);
+  const OccupancyCounts counts = map.Counts();
+  EXPECT_EQ(counts.occupied, 1u);
+  EXPECT_EQ(counts.free, 50u);  // voxels 0..49 along +x, the endpoint's voxel 50 is occupied
+  EXPECT_EQ(map.last_stats().rays, 1u);
+}
+
+TEST(OccupancyMap, WallIsOccupiedAndTheSpaceBeforeItFree) {
+  OccupancyMap map(TestConfig());
+  const ScanW scan = WallScan(2.005, 0.3);
+  map.Integrate(scan);
+  std::set<std::tuple<int, int, int>> wall_voxels;
+  for (const Eigen::Vector3f& p : scan.structure_points_W) {
+    EXPECT_EQ(map.Query(p.cast<double>()), VoxelState::kOccupied);
+    wall_voxels.emplace(std::floor(p.x() / 0.01), std::floor(p.y() / 0.01),
+                        std::floor(p.z() / 0.01));
+    for (double f : {0.1, 0.5, 0.9, 0.99}) {
+      EXPECT_EQ(map.Query(p.cast<double>() * f), VoxelState::kFree) << "f=" << f;
+    }
+    EXPECT_EQ(map.Query(p.cast<double>() * 1.02), VoxelState::kUnknown);
+  }
+  EXPECT_EQ(map.Counts().occupied, wall_voxels.size());
+  EXPECT_GT(map.Counts().free, 100000u);
+}
+
+TEST(OccupancyMap, MaxRangeTruncatesFreeSpaceAndDropsTheEndpoint) {
+  OccupancyConfig config = TestConfig();
+  config.max_range_m = 1.0;
+  OccupancyMap map(config);
+  ScanW scan;
+  scan.structure_points_W.emplace_back(2.005f, 0.005f, 0.005f);
+  map.Integrate(scan);
+  EXPECT_EQ(map.Query(Vec3d(0.505, 0.005, 0.005)), VoxelState::kFree);
+  EXPECT_EQ(map.Query(Vec3d(0.975, 0.005, 0.005)), VoxelState::kFree);
+  EXPECT_EQ(map.Query(Vec3d(1.015, 0.005, 0.005)), VoxelState::kUnknown);
+  EXPECT_EQ(map.Query(Vec3d(1.5, 0.005, 0.005)), VoxelState::kUnknown);
+  EXPECT_EQ(map.Query(Vec3d(2.005, 0.005, 0.005)), VoxelState::kUnknown);
+  EXPECT_EQ(map.Counts().occupied, 0u);
+  // Voxels from the origin up to the one holding the 1 m mark (excluded, as in OctoMap).
+  EXPECT_NEAR(static_cast<double>(map.Counts().free), 100.0, 1.0);
+}
+
+TEST(OccupancyMap, ObjectPointsCarveButAreNotOccupied) {
+  OccupancyMap map(TestConfig());
+  ScanW scan;
+  scan.object_points_W.emplace_back(1.005f, 0.005f, 0.005f);
+  map.Integrate(scan);
+  EXPECT_EQ(map.Query(Vec3d(0.505, 0.005, 0.005)), VoxelState::kFree);
+  EXPECT_EQ(map.Query(Vec3d(1.005, 0.005, 0.005)), VoxelState::kUnknown);
+  EXPECT_EQ(map.Query(Vec3d(0.995, 0.005, 0.005)), VoxelState::kUnknown);  // margin
+  EXPECT_EQ(map.Query(Vec3d(0.985, 0.005, 0.005)), VoxelState::kUnknown);  // margin
+  EXPECT_EQ(map.Counts().occupied, 0u);
+}
+
+TEST(OccupancyMap, ObjectInFrontOfAWallDoesNotEraseIt) {
+  OccupancyMap map(TestConfig());
+  const ScanW wall = WallScan(1.505, 0.2);
+  map.Integrate(wall);
+  const std::size_t wall_occupied = map.Counts().occupied;
+  // An object lying against the wall, seen many times: its rays stop short of the wall.
+  ScanW object;
+  for (const Eigen::Vector3f& p : wall.structure_points_W) {
+    object.object_points_W.push_back(p - Eigen::Vector3f(0.01f, 0.0f, 0.0f));
+  }
+  for (int i = 0; i < 10; ++i) map.Integrate(object);
+  EXPECT_EQ(map.Counts().occupied, wall_occupied);
+  for (const Eigen::Vector3f& p : wall.structure_points_W) {
+    ASSERT_EQ(map.Query(p.cast<double>()), VoxelState::kOccupied);
+  }
+}
+
+TEST(OccupancyMap, NonFinitePointsAreSkipped) {
+  OccupancyMap map(TestConfig());
+  ScanW scan;
+  scan.structure_points_W.emplace_back(NAN, 0.0f, 1.0f);
+  scan.structure_points_W.emplace_back(INFINITY, 0.0f, 1.0f);
+  scan.object_points_W.emplace_back(0.0f, NAN, 1.0f);
+  map.Integrate(scan);
+  EXPECT_EQ(map.Counts().occupied + map.Counts().free, 0u);
+  scan.origin_W = Eigen::Vector3f(NAN, 0.0f, 0.0f);
+  scan.structure_points_W.assign(1, Eigen::Vector3f(0.5f, 0.0f, 0.0f));
+  map.Integrate(scan);
+  EXPECT_EQ(map.Counts().occupied + map.Counts().free, 0u);
+}
+
+// A few thousand points on three planes and a box, some beyond max range, seen from three
+// origins, so later scans hit pruned blocks and earlier updates.
+ScanW SyntheticScan(int seed, const Eigen::Vector3f& origin) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  ScanW scan;
+  scan.origin_W = origin;
+  for (int i = 0; i < 1500; ++i) {
+    scan.structure_points_W.emplace_back(1.2f + 0.05f * u(rng), 0.6f * u(rng), 0.4f * u(rng));
+    scan.structure_points_W.emplace_back(0.8f * u(rng) + 0.4f, 0.6f * u(rng), -0.45f);
+  }
+  for (int i = 0; i < 300; ++i) {  // beyond max range: free space only
+    scan.structure_points_W.emplace_back(2.5f, 0.5f * u(rng), 0.3f * u(rng));
+  }
+  return scan;
+}
+
+TEST(OccupancyMap, MatchesStockInsertPointCloudVoxelForVoxel) {
+  const OccupancyConfig config = TestConfig();
+  OccupancyConfig short_range = config;
+  short_range.max_range_m = 1.5;
+  OccupancyMap map(short_range);
+  octomap::OcTree stock(config.resolution_m);
+  stock.setProbHit(config.probability_hit);
+  stock.setProbMiss(config.probability_miss);
+  stock.setClampingThresMin(config.clamping_min);
+  stock.setClampingThresMax(config.clamping_max);
+  const Eigen::Vector3f origins[] = {
+      {0.013f, -0.021f, 0.037f}, {0.113f, 0.079f, -0.063f}, {0.013f, -0.021f, 0.037f}};
+  for (int s = 0; s < 3; ++s) {
+    const ScanW scan = SyntheticScan(7 + s, origins[s]);
+    map.Integrate(scan);
+    octomap::Pointcloud cloud;
+    for (const Eigen::Vector3f& p : scan.structure_points_W) cloud.push_back(p.x(), p.y(), p.z());
+    stock.insertPointCloud(cloud, octomap::point3d(origins[s].x(), origins[s].y(), origins[s].z()),
+                           short_range.max_range_m);
+  }
+  const std::string path = ::testing::TempDir() + "/objmap_occupancy_compare.bt";
+  std::string why;
+  ASSERT_TRUE(map.WriteBinary(path, &why)) << why;
+  octomap::OcTree ours(path);
+  const testing::LeafComparison cmp = testing::CompareTrees(ours, stock);
+  std::printf("known voxels %zu, agree %zu, only ours %zu, only stock %zu, state differs %zu\n",
+              cmp.known_in_either, cmp.agree, cmp.only_a, cmp.only_b, cmp.state_differs);
+  EXPECT_GT(cmp.known_in_either, 100000u);
+  EXPECT_EQ(cmp.agree, cmp.known_in_either);  // the design is exact, not approximate
+  std::remove(path.c_str());
+}
+
+TEST(OccupancyMap, WriteBinaryReadsBackWithTheSameCounts) {
+  OccupancyMap map(TestConfig());
+  map.Integrate(SyntheticScan(3, Eigen::Vector3f(0.0f, 0.0f, 0.0f)));
+  const OccupancyCounts counts = map.Counts();
+  ASSERT_GT(counts.occupied, 0u);
+  const std::string path = ::testing::TempDir() + "/objmap_occupancy_roundtrip.bt";
+  std::string why;
+  ASSERT_TRUE(map.WriteBinary(path, &why)) << why;
+  octomap::OcTree read_back(path);
+  std::size_t occupied = 0, free = 0;
+  for (std::uint64_t v : testing::ExpandLeaves(read_back)) ((v & 1) ? occupied : free)++;
+  EXPECT_EQ(occupied, counts.occupied);
+  EXPECT_EQ(free, counts.free);
+  EXPECT_DOUBLE_EQ(read_back.getResolution(), 0.01);
+  std::remove(path.c_str());
+  EXPECT_FALSE(map.WriteBinary("/nonexistent_dir/x.bt", &why));
+  EXPECT_NE(why.find("/nonexistent_dir/x.bt"), std::string::npos);
+  map.Clear();
+  EXPECT_EQ(map.Counts().occupied + map.Counts().free, 0u);
+}
+
+}  // namespace
+}  // namespace objmap
