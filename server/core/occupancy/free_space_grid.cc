@@ -61,16 +61,6 @@ std::int64_t FreeSpaceGrid::BrickCell(const VoxelKey& key) const {
   return (static_cast<std::int64_t>(bz) * dims_[1] + by) * dims_[0] + bx;
 }
 
-FreeSpaceGrid::Brick& FreeSpaceGrid::BrickAt(const VoxelKey& key) {
-  const std::int64_t cell = BrickCell(key);
-  std::int32_t& index = cell_to_brick_[static_cast<std::size_t>(cell)];
-  if (index < 0) {
-    index = static_cast<std::int32_t>(bricks_.size());
-    bricks_.push_back(Brick{});
-  }
-  return bricks_[static_cast<std::size_t>(index)];
-}
-
 void FreeSpaceGrid::AddRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& end) {
   VoxelKey key_origin, key_end;
   if (!PointToKey(origin, resolution_m_, &key_origin) ||
@@ -83,39 +73,60 @@ void FreeSpaceGrid::AddRay(const Eigen::Vector3f& origin, const Eigen::Vector3f&
   const float length = static_cast<float>(std::sqrt(static_cast<double>(
       direction[0] * direction[0] + direction[1] * direction[1] + direction[2] * direction[2])));
   direction /= length;
-  int step[3];
-  double t_max[3], t_delta[3];
+  DdaRay ray;
   for (int i = 0; i < 3; ++i) {
-    step[i] = direction[i] > 0.0f ? 1 : (direction[i] < 0.0f ? -1 : 0);
-    if (step[i] == 0) {
-      t_max[i] = t_delta[i] = std::numeric_limits<double>::max();
+    ray.step[i] = direction[i] > 0.0f ? 1 : (direction[i] < 0.0f ? -1 : 0);
+    ray.key[i] = key_origin[i];
+    ray.end[i] = key_end[i];
+    if (ray.step[i] == 0) {
+      ray.t_max[i] = ray.t_delta[i] = std::numeric_limits<double>::max();
       continue;
     }
     double border = KeyToCoord(key_origin[i], resolution_m_);
-    border += static_cast<float>(step[i] * resolution_m_ * 0.5);
-    t_max[i] = (border - static_cast<double>(origin[i])) / static_cast<double>(direction[i]);
-    t_delta[i] = resolution_m_ / std::fabs(static_cast<double>(direction[i]));
+    border += static_cast<float>(ray.step[i] * resolution_m_ * 0.5);
+    ray.t_max[i] = (border - static_cast<double>(origin[i])) / static_cast<double>(direction[i]);
+    ray.t_delta[i] = resolution_m_ / std::fabs(static_cast<double>(direction[i]));
   }
-  VoxelKey key = key_origin;
-  Brick* brick = &BrickAt(key);
-  int brick_id[3] = {key[0] >> kBrickShift, key[1] >> kBrickShift, key[2] >> kBrickShift};
+  ray.length = length;
+  Traverse(ray);
+}
+
+// The DDA loop, written without data-dependent branches: which axis steps next is random from
+// one voxel to the next, and mispredicted branches dominated the cost.
+void FreeSpaceGrid::Traverse(const DdaRay& ray) {
+  int kx = ray.key[0], ky = ray.key[1], kz = ray.key[2];
+  double tx = ray.t_max[0], ty = ray.t_max[1], tz = ray.t_max[2];
+  const std::int64_t stride_y = dims_[0], stride_z = std::int64_t{dims_[0]} * dims_[1];
+  const std::int64_t cell_offset = -(lo_[0] + lo_[1] * stride_y + lo_[2] * stride_z);
   while (true) {
-    (*brick)[key[2] & 7] |= std::uint64_t{1} << ((key[0] & 7) + 8 * (key[1] & 7));
-    int dim;
-    if (t_max[0] < t_max[1]) {
-      dim = t_max[0] < t_max[2] ? 0 : 2;
-    } else {
-      dim = t_max[1] < t_max[2] ? 1 : 2;
-    }
-    key[dim] = static_cast<std::uint16_t>(key[dim] + step[dim]);
-    t_max[dim] += t_delta[dim];
-    if (key == key_end) return;
-    if (std::min(std::min(t_max[0], t_max[1]), t_max[2]) > length) return;
-    if ((key[dim] >> kBrickShift) != brick_id[dim]) {
-      brick_id[dim] = key[dim] >> kBrickShift;
-      brick = &BrickAt(key);
-    }
+    const std::int64_t cell = (kx >> kBrickShift) + (ky >> kBrickShift) * stride_y +
+                              (kz >> kBrickShift) * stride_z + cell_offset;
+    std::int32_t index = cell_to_brick_[static_cast<std::size_t>(cell)];
+    if (index < 0) index = NewBrick(cell);
+    bricks_[static_cast<std::size_t>(index)][kz & 7] |= std::uint64_t{1}
+                                                        << ((kx & 7) + 8 * (ky & 7));
+    // Same tie-breaking as OctoMap: x only on strict minimum, z wins ties with the others.
+    const bool x_lt_y = tx < ty;
+    const bool pick_x = x_lt_y && tx < tz;
+    const bool pick_y = !x_lt_y && ty < tz;
+    const bool pick_z = !pick_x && !pick_y;
+    kx += pick_x ? ray.step[0] : 0;
+    ky += pick_y ? ray.step[1] : 0;
+    kz += pick_z ? ray.step[2] : 0;
+    tx += pick_x ? ray.t_delta[0] : 0.0;
+    ty += pick_y ? ray.t_delta[1] : 0.0;
+    tz += pick_z ? ray.t_delta[2] : 0.0;
+    if (kx == ray.end[0] && ky == ray.end[1] && kz == ray.end[2]) return;
+    // Stop once past the end point: float drift can make the ray miss the end voxel.
+    if (std::min(std::min(tx, ty), tz) > ray.length) return;
   }
+}
+
+std::int32_t FreeSpaceGrid::NewBrick(std::int64_t cell) {
+  const auto index = static_cast<std::int32_t>(bricks_.size());
+  cell_to_brick_[static_cast<std::size_t>(cell)] = index;
+  bricks_.push_back(Brick{});
+  return index;
 }
 
 void FreeSpaceGrid::Clear(const VoxelKey& key) {

@@ -58,8 +58,15 @@ class FreeSpaceGrid {
  private:
   using Brick = std::array<std::uint64_t, 8>;  // one word per z slice, bit = x + 8 * y
 
+  struct DdaRay {
+    int key[3], end[3], step[3];
+    double t_max[3], t_delta[3];
+    double length;
+  };
+
   [[nodiscard]] std::int64_t BrickCell(const VoxelKey& key) const;
-  Brick& BrickAt(const VoxelKey& key);
+  void Traverse(const DdaRay& ray);
+  std::int32_t NewBrick(std::int64_t cell);
   [[nodiscard]] BlockState SubBrickState(int depth, const VoxelKey& key) const;
   void BuildLevel(int level);
 
@@ -67,7 +74,6 @@ class FreeSpaceGrid {
   std::array<int, 3> lo_ = {0, 0, 0};        // brick coordinates (key >> 3) of the first cell
   std::array<int, 3> dims_ = {0, 0, 0};      // cells per axis
   std::vector<std::int32_t> cell_to_brick_;  // -1 where no voxel is set
-  std::vector<std::int64_t> used_cells_;
   std::vector<Brick> bricks_;
   // levels_[L] summarizes nodes at depth 13 - L; dims and origins per level.
   std::vector<std::vector<BlockState>> levels_;

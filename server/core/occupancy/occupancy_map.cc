@@ -169,6 +169,7 @@ void OccupancyMap::Integrate(const ScanW& scan) {
   m.CastRays(scan.origin_W, origin_key);
   m.stats.rays = m.ray_ends_W.size();
   m.stats.occupied_voxels = m.occupied_keys.size();
+  m.stats.free_voxels = m.grid.CountSet();
   m.stats.cast_ms = MsSince(start);
   const Clock::time_point update_start = Clock::now();
   m.tree.ApplyFreeSpace(m.grid);
