@@ -2,6 +2,7 @@
 // 7-Scenes redkitchen keyframes, plus voxel-by-voxel agreement of the two maps.
 //
 // Usage: occupancy_bench [data_dir] [keyframes=10] [stride=10] [stock_keyframes=2] [max_range_m=4]
+//                        [one_ray_per_end_voxel=0]
 
 #include <octomap/OcTree.h>
 
@@ -27,6 +28,7 @@ struct Args {
   int stride = 10;
   int stock_keyframes = 2;
   double max_range_m = 4.0;
+  bool one_ray_per_end_voxel = false;
 };
 
 double MsSince(Clock::time_point start) {
@@ -108,6 +110,7 @@ Args ParseArgs(int argc, char** argv) {
   if (argc > 3) args.stride = std::atoi(argv[3]);
   if (argc > 4) args.stock_keyframes = std::atoi(argv[4]);
   if (argc > 5) args.max_range_m = std::atof(argv[5]);
+  if (argc > 6) args.one_ray_per_end_voxel = std::atoi(argv[6]) != 0;
   return args;
 }
 
@@ -154,6 +157,7 @@ int main(int argc, char** argv) {
   const Args args = ParseArgs(argc, argv);
   objmap::OccupancyConfig config;
   config.max_range_m = args.max_range_m;
+  config.one_ray_per_end_voxel = args.one_ray_per_end_voxel;
   objmap::OccupancyMap map(config);
   octomap::OcTree stock(config.resolution_m);
   Totals totals;

@@ -80,6 +80,7 @@ struct OccupancyMap::Impl {
   }
 
   void CollectRays(const ScanW& scan);
+  void KeepOneRayPerEndVoxel();
   void CastRays(const Eigen::Vector3f& origin, const VoxelKey& origin_key);
   void ApplyOccupied();
 
@@ -120,8 +121,28 @@ void OccupancyMap::Impl::CollectRays(const ScanW& scan) {
     }
     ray_ends_W.push_back(ray.end_W);
   }
+  if (config.one_ray_per_end_voxel) KeepOneRayPerEndVoxel();
   std::sort(occupied_keys.begin(), occupied_keys.end());
   occupied_keys.erase(std::unique(occupied_keys.begin(), occupied_keys.end()), occupied_keys.end());
+}
+
+// Rays to points in the same end voxel cross nearly the same voxels; keep the first of each.
+void OccupancyMap::Impl::KeepOneRayPerEndVoxel() {
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed;
+  keyed.reserve(ray_ends_W.size());
+  for (std::size_t i = 0; i < ray_ends_W.size(); ++i) {
+    VoxelKey key;
+    if (PointToKey(ray_ends_W[i], config.resolution_m, &key)) {
+      keyed.emplace_back(PackKey(key), static_cast<std::uint32_t>(i));
+    }
+  }
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<Eigen::Vector3f> kept;
+  kept.reserve(keyed.size());
+  for (std::size_t i = 0; i < keyed.size(); ++i) {
+    if (i == 0 || keyed[i].first != keyed[i - 1].first) kept.push_back(ray_ends_W[keyed[i].second]);
+  }
+  ray_ends_W.swap(kept);
 }
 
 void OccupancyMap::Impl::CastRays(const Eigen::Vector3f& origin, const VoxelKey& origin_key) {

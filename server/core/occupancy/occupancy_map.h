@@ -22,6 +22,9 @@ struct OccupancyConfig {
   /// Object rays stop this many voxels short of the object point, so object surfaces do not
   /// carve the structure they rest on.
   int object_margin_voxels = 2;
+  /// Approximation for speed: cast one free-space ray per distinct end voxel (to the first point
+  /// in it) instead of one per point. Off: the result equals stock insertPointCloud exactly.
+  bool one_ray_per_end_voxel = false;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
