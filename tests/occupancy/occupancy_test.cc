@@ -165,11 +165,9 @@ ScanW SyntheticScan(int seed, const Eigen::Vector3f& origin) {
   return scan;
 }
 
-TEST(OccupancyMap, MatchesStockInsertPointCloudVoxelForVoxel) {
-  const OccupancyConfig config = TestConfig();
-  OccupancyConfig short_range = config;
-  short_range.max_range_m = 1.5;
-  OccupancyMap map(short_range);
+// Integrates three synthetic scans into both maps and compares them voxel by voxel.
+testing::LeafComparison CompareWithStock(const OccupancyConfig& config) {
+  OccupancyMap map(config);
   octomap::OcTree stock(config.resolution_m);
   stock.setProbHit(config.probability_hit);
   stock.setProbMiss(config.probability_miss);
@@ -183,18 +181,35 @@ TEST(OccupancyMap, MatchesStockInsertPointCloudVoxelForVoxel) {
     octomap::Pointcloud cloud;
     for (const Eigen::Vector3f& p : scan.structure_points_W) cloud.push_back(p.x(), p.y(), p.z());
     stock.insertPointCloud(cloud, octomap::point3d(origins[s].x(), origins[s].y(), origins[s].z()),
-                           short_range.max_range_m);
+                           config.max_range_m);
   }
   const std::string path = ::testing::TempDir() + "/objmap_occupancy_compare.bt";
   std::string why;
-  ASSERT_TRUE(map.WriteBinary(path, &why)) << why;
+  EXPECT_TRUE(map.WriteBinary(path, &why)) << why;
   octomap::OcTree ours(path);
+  std::remove(path.c_str());
   const testing::LeafComparison cmp = testing::CompareTrees(ours, stock);
   std::printf("known voxels %zu, agree %zu, only ours %zu, only stock %zu, state differs %zu\n",
               cmp.known_in_either, cmp.agree, cmp.only_a, cmp.only_b, cmp.state_differs);
+  return cmp;
+}
+
+TEST(OccupancyMap, MatchesStockInsertPointCloudVoxelForVoxel) {
+  OccupancyConfig config = TestConfig();
+  config.max_range_m = 1.5;  // the scans have points beyond it
+  const testing::LeafComparison cmp = CompareWithStock(config);
   EXPECT_GT(cmp.known_in_either, 100000u);
   EXPECT_EQ(cmp.agree, cmp.known_in_either);  // the design is exact, not approximate
-  std::remove(path.c_str());
+}
+
+TEST(OccupancyMap, OneRayPerEndVoxelStaysCloseToStock) {
+  OccupancyConfig config = TestConfig();
+  config.max_range_m = 1.5;
+  config.one_ray_per_end_voxel = true;
+  const testing::LeafComparison cmp = CompareWithStock(config);
+  EXPECT_GT(cmp.Agreement(), 0.98);
+  EXPECT_EQ(cmp.only_a, 0u);  // it can only miss free voxels, never invent them
+  EXPECT_EQ(cmp.state_differs, 0u);
 }
 
 TEST(OccupancyMap, WriteBinaryReadsBackWithTheSameCounts) {
