@@ -25,7 +25,7 @@ struct CommandResult {
   std::string output;  // stdout and stderr together
 };
 
-CommandResult Run(const std::string& arguments) {
+CommandResult RunObjmap(const std::string& arguments) {
   const std::string command = std::string(OBJMAP_CLI_PATH) + " " + arguments + " 2>&1";
   CommandResult result;
   FILE* pipe = popen(command.c_str(), "r");
@@ -121,7 +121,7 @@ class CliScene : public ::testing::Test {
 };
 
 TEST_F(CliScene, MapsAndWritesEveryOutput) {
-  const CommandResult run = Run(MapArguments(""));
+  const CommandResult run = RunObjmap(MapArguments(""));
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_NE(run.output.find("keyframes: 4 of 4"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("median ms per keyframe"), std::string::npos) << run.output;
@@ -142,7 +142,7 @@ TEST_F(CliScene, MapsAndWritesEveryOutput) {
 TEST_F(CliScene, BadFramesAreSkippedWithTheirFileNamedOrStopTheRun) {
   std::ofstream(Seq("frame-000001.color.png")) << "not an image";
   std::ofstream(Seq("frame-000002.pose.txt")) << "1 0 0 nan\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";
-  CommandResult run = Run(MapArguments("--min-observations 2"));
+  CommandResult run = RunObjmap(MapArguments("--min-observations 2"));
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_NE(run.output.find("skipped frame 1: " + Seq("frame-000001.color.png")), std::string::npos)
       << run.output;
@@ -151,21 +151,22 @@ TEST_F(CliScene, BadFramesAreSkippedWithTheirFileNamedOrStopTheRun) {
       << run.output;
   EXPECT_NE(run.output.find("keyframes: 2 of 4"), std::string::npos) << run.output;
 
-  run = Run(MapArguments("--stop-on-error"));
+  run = RunObjmap(MapArguments("--stop-on-error"));
   EXPECT_EQ(run.exit_code, 1) << run.output;
   EXPECT_NE(run.output.find("stopped at frame 1"), std::string::npos) << run.output;
 }
 
 TEST_F(CliScene, EmptyOrMissingInputIsAClearError) {
   fs::create_directories(Path("empty"));
-  CommandResult run = Run("map " + Path("empty") + " --out " + Path("o") + " --detections " +
-                          Path("detections.json"));
+  CommandResult run = RunObjmap("map " + Path("empty") + " --out " + Path("o") + " --detections " +
+                                Path("detections.json"));
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_NE(run.output.find("empty sequence"), std::string::npos) << run.output;
-  run = Run("map " + Path("seq") + " --out " + Path("o") + " --detections " + Path("nope.json"));
+  run = RunObjmap("map " + Path("seq") + " --out " + Path("o") + " --detections " +
+                  Path("nope.json"));
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_NE(run.output.find("nope.json"), std::string::npos) << run.output;
-  run = Run("map " + Path("seq") + " --out " + Path("o") + " --max-frames many");
+  run = RunObjmap("map " + Path("seq") + " --out " + Path("o") + " --max-frames many");
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_NE(run.output.find("--max-frames expects a number"), std::string::npos) << run.output;
 }
@@ -174,7 +175,7 @@ TEST(CliSegment, WritesOneLabelPerPoint) {
   const std::string cloud = testing::SharedDataPath("mosd-learn/learn0.pcd");
   OBJMAP_REQUIRE_PATH(cloud);
   const std::string out = (fs::temp_directory_path() / "objmap_cli_segment.pcd").string();
-  const CommandResult run = Run("segment " + cloud + " --out " + out);
+  const CommandResult run = RunObjmap("segment " + cloud + " --out " + out);
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_NE(run.output.find("640x480"), std::string::npos) << run.output;
   EXPECT_GT(fs::file_size(out), 640u * 480u * 4u);

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cassert>
 #include <chrono>
+#include <cmath>
+#include <cstdint>
 #include <sstream>
 
 #include "mapper/keyframe_segments.h"
@@ -17,11 +19,14 @@ double MillisecondsSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
-// The keyframe data regeneration needs: pose and the keyframe's clouds in its camera frame.
+// What regeneration needs of a keyframe: its pose, its depth image (millimetres, as sensors
+// deliver it: 2 bytes a pixel) and which pixels belong to objects. Clouds are re-made from it,
+// so a regenerated map is the map that full-resolution integration would have built.
 struct KeyframeRecord {
   Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
-  std::vector<Eigen::Vector3f> structure_points_C;
-  std::vector<Eigen::Vector3f> object_points_C;
+  CameraIntrinsics intrinsics;
+  std::vector<std::uint16_t> depth_mm;
+  std::vector<bool> is_object;
 };
 
 std::vector<Eigen::Vector3f> ToWorld(const std::vector<Eigen::Vector3f>& points_C,
@@ -34,30 +39,38 @@ std::vector<Eigen::Vector3f> ToWorld(const std::vector<Eigen::Vector3f>& points_
 }
 
 ScanW ToScan(const KeyframeRecord& record) {
+  const CameraIntrinsics& K = record.intrinsics;
+  const Eigen::Isometry3f T_W_C = record.T_W_C.cast<float>();
   ScanW scan;
-  scan.origin_W = record.T_W_C.translation().cast<float>();
-  scan.structure_points_W = ToWorld(record.structure_points_C, record.T_W_C);
-  scan.object_points_W = ToWorld(record.object_points_C, record.T_W_C);
+  scan.origin_W = T_W_C.translation();
+  for (int v = 0; v < K.height; ++v) {
+    for (int u = 0; u < K.width; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * K.width + u;
+      if (record.depth_mm[i] == 0) continue;
+      const float z = record.depth_mm[i] * 0.001f;
+      const Eigen::Vector3f p_C(static_cast<float>((u - K.cx) / K.fx) * z,
+                                static_cast<float>((v - K.cy) / K.fy) * z, z);
+      (record.is_object[i] ? scan.object_points_W : scan.structure_points_W).push_back(T_W_C * p_C);
+    }
+  }
   return scan;
 }
 
-// Splits the valid points into object pixels and the rest, each downsampled to `voxel_m`.
-KeyframeRecord MakeRecord(const OrganizedCloud& cloud_C,
-                          const std::vector<SegmentedDetection>& segmented,
-                          const Eigen::Isometry3d& T_W_C, float voxel_m) {
-  std::vector<char> is_object(cloud_C.size(), 0);
-  for (const SegmentedDetection& entry : segmented) {
-    for (int i : entry.pixels) is_object[i] = 1;
-  }
-  ColoredPoints structure, objects;
-  for (std::size_t i = 0; i < cloud_C.size(); ++i) {
-    if (!cloud_C.IsValid(static_cast<int>(i))) continue;
-    (is_object[i] ? objects : structure).points.push_back(cloud_C.points_C[i]);
-  }
+KeyframeRecord MakeRecord(const RgbdFrame& frame,
+                          const std::vector<SegmentedDetection>& segmented) {
   KeyframeRecord record;
-  record.T_W_C = T_W_C;
-  record.structure_points_C = VoxelDownsample(structure, voxel_m).points;
-  record.object_points_C = VoxelDownsample(objects, voxel_m).points;
+  record.T_W_C = frame.T_W_C;
+  record.intrinsics = frame.intrinsics;
+  record.depth_mm.resize(frame.depth.depth_m.size());
+  for (std::size_t i = 0; i < record.depth_mm.size(); ++i) {
+    const float depth_m = frame.depth.depth_m[i];
+    const bool valid = std::isfinite(depth_m) && depth_m > 0.f && depth_m < 65.f;
+    record.depth_mm[i] = valid ? static_cast<std::uint16_t>(std::lround(depth_m * 1000.f)) : 0;
+  }
+  record.is_object.assign(record.depth_mm.size(), false);
+  for (const SegmentedDetection& entry : segmented) {
+    for (int i : entry.pixels) record.is_object[i] = true;
+  }
   return record;
 }
 
@@ -80,8 +93,8 @@ bool MapperConfig::IsValid(std::string* why) const {
     *why = "MapperConfig.min_detection_score must be in [0, 1]";
     return false;
   }
-  if (min_segment_points < 1 || !(keyframe_cloud_voxel_m > 0.f)) {
-    *why = "MapperConfig: min_segment_points must be >= 1 and keyframe_cloud_voxel_m > 0";
+  if (min_segment_points < 1) {
+    *why = "MapperConfig.min_segment_points must be >= 1";
     return false;
   }
   return true;
@@ -170,8 +183,7 @@ bool Mapper::AddKeyframe(const RgbdFrame& frame, const std::vector<Detection>& d
   std::vector<SegmentedDetection> segmented = SegmentDetections(
       frame, cloud_C, segmentation, detections, result->keyframe_id, impl_->config);
   result->detections_used = static_cast<int>(segmented.size());
-  KeyframeRecord record =
-      MakeRecord(cloud_C, segmented, frame.T_W_C, impl_->config.keyframe_cloud_voxel_m);
+  KeyframeRecord record = MakeRecord(frame, segmented);
   result->timings.segmentation_ms = MillisecondsSince(start);
 
   start = Clock::now();

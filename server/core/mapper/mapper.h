@@ -41,8 +41,6 @@ struct MapperConfig {
   /// Detections of these COCO classes may take a supporting-plane segment (a table's top is the
   /// plane the segmentation separates everything else from).
   std::vector<int> surface_classes = {60 /* dining table */, 59 /* bed */};
-  /// Voxel size of the per-keyframe structure clouds kept for regeneration, metres.
-  float keyframe_cloud_voxel_m = 0.01f;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
