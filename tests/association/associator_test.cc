@@ -85,5 +85,22 @@ TEST(Associator, FindsDuplicatesOfTheSameLabelOnly) {
   EXPECT_EQ(duplicates[0], std::make_pair(whole, piece));
 }
 
+TEST(Associator, ClassesMustAgreeUnlessGatingIsOff) {
+  // A book lying on a table: all its points are within 2 cm of the table's model.
+  ObjectMap map;
+  const int kTable = CocoClassId("dining table");
+  const int kBook = CocoClassId("book");
+  const auto table = testing::BoxSurface({0, 0, 0}, {1.0f, 0.6f, 0.02f}, 0.01f);
+  const auto book = testing::BoxSurface({0.2f, 0.2f, 0.0f}, {0.4f, 0.35f, 0.02f}, 0.01f);
+  const ObjectId table_id = map.AddObject(Observation(1, kTable, table), kIdentity);
+  Associator gated{AssociationConfig{}};
+  EXPECT_FALSE(gated.AssignKeyframe(map, {{book, kBook}})[0].has_value());
+  EXPECT_EQ(gated.AssignKeyframe(map, {{book, kTable}})[0], table_id);
+  AssociationConfig paper;
+  paper.min_class_share = 0.f;
+  Associator geometric{paper};
+  EXPECT_EQ(geometric.AssignKeyframe(map, {{book, kBook}})[0], table_id);
+}
+
 }  // namespace
 }  // namespace objmap

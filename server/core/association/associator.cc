@@ -53,8 +53,19 @@ struct Associator::TreeCache {
 };
 
 bool AssociationConfig::IsValid(std::string* why) const {
-  if (!(candidate_margin_m >= 0.f) || !(match_distance_m > 0.f)) {
-    *why = "AssociationConfig: candidate_margin_m must be >= 0 and match_distance_m > 0";
+  if (!(candidate_margin_m >= 0.f) || !(match_distance_m > 0.f) ||
+      !(duplicate_distance_m >= match_distance_m)) {
+    *why =
+        "AssociationConfig: candidate_margin_m must be >= 0, match_distance_m > 0 and "
+        "duplicate_distance_m >= match_distance_m";
+    return false;
+  }
+  if (max_test_points < 1) {
+    *why = "AssociationConfig.max_test_points must be >= 1";
+    return false;
+  }
+  if (!(min_class_share >= 0.f && min_class_share <= 1.f)) {
+    *why = "AssociationConfig.min_class_share must be in [0, 1]";
     return false;
   }
   if (!(min_match_fraction > 0.f && min_match_fraction <= 1.f)) {
@@ -71,21 +82,26 @@ Associator::Associator(Associator&&) noexcept = default;
 Associator& Associator::operator=(Associator&&) noexcept = default;
 
 float Associator::MatchFraction(const MapObject& object,
-                                const std::vector<Eigen::Vector3f>& points_W) {
+                                const std::vector<Eigen::Vector3f>& points_W, float distance_m) {
   if (points_W.empty()) return 0.f;
   CachedTree& cached = trees_->TreeOf(object);
   if (cached.empty) return 0.f;
-  const float max_sq = config_.match_distance_m * config_.match_distance_m;
+  const float distance = distance_m > 0.f ? distance_m : config_.match_distance_m;
+  const float max_sq = distance * distance;
   std::vector<int> index(1);
   std::vector<float> distance_sq(1);
+  const std::size_t stride = (points_W.size() + config_.max_test_points - 1) /
+                             static_cast<std::size_t>(config_.max_test_points);
   std::size_t matched = 0;
-  for (const Eigen::Vector3f& p : points_W) {
+  std::size_t tested = 0;
+  for (std::size_t i = 0; i < points_W.size(); i += stride, ++tested) {
+    const Eigen::Vector3f& p = points_W[i];
     if (cached.tree.nearestKSearch(pcl::PointXYZ(p.x(), p.y(), p.z()), 1, index, distance_sq) > 0 &&
         distance_sq[0] <= max_sq) {
       ++matched;
     }
   }
-  return static_cast<float>(matched) / static_cast<float>(points_W.size());
+  return static_cast<float>(matched) / static_cast<float>(tested);
 }
 
 std::vector<ObjectId> Associator::Candidates(const ObjectMap& map,
@@ -111,6 +127,7 @@ std::vector<std::optional<ObjectId>> Associator::AssignKeyframe(
   std::vector<Pair> pairs;
   for (std::size_t s = 0; s < segments.size(); ++s) {
     for (ObjectId id : Candidates(map, segments[s].points_W)) {
+      if (!ClassCompatible(*map.Find(id), segments[s].class_id)) continue;
       const float fraction = MatchFraction(*map.Find(id), segments[s].points_W);
       if (fraction >= config_.min_match_fraction) pairs.push_back({fraction, s, id});
     }
@@ -127,6 +144,13 @@ std::vector<std::optional<ObjectId>> Associator::AssignKeyframe(
     taken.push_back(pair.object);
   }
   return assignment;
+}
+
+bool Associator::ClassCompatible(const MapObject& object, int class_id) const {
+  if (config_.min_class_share <= 0.f) return true;
+  if (class_id < 0 || class_id >= kNumCocoClasses) return false;
+  const float best = object.accumulated_scores[object.Label()];
+  return object.accumulated_scores[class_id] >= config_.min_class_share * best;
 }
 
 std::vector<std::pair<ObjectId, ObjectId>> Associator::FindDuplicates(

@@ -1,15 +1,15 @@
 #include "mapper/keyframe_segments.h"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 #include <unordered_set>
 
 namespace objmap {
 namespace {
 
-bool IsSurfaceClass(int class_id, const MapperConfig& config) {
-  return std::find(config.surface_classes.begin(), config.surface_classes.end(), class_id) !=
-         config.surface_classes.end();
+bool Contains(const std::vector<int>& classes, int class_id) {
+  return std::find(classes.begin(), classes.end(), class_id) != classes.end();
 }
 
 bool Inside(const BoundingBox2D& box, int u, int v) {
@@ -42,6 +42,72 @@ std::vector<int> SurfacePlanePixels(const SegmentationResult& segmentation,
     if (segmentation.labels[i] == best) pixels.push_back(i);
   }
   return pixels;
+}
+
+// Flat objects (a screen on a wall, a keyboard on a desk) lie within depth noise of their
+// supporting plane, so no segment separates them (the paper's lost keyboards). When one plane
+// segment covers most of the box, the object is the part of that plane the box covers, shrunk
+// by `shrink_fraction` on every side because colour and depth are not registered.
+std::vector<int> FlatObjectPixels(const SegmentationResult& segmentation, const BoundingBox2D& box,
+                                  float shrink_fraction) {
+  const float du = shrink_fraction * box.Width();
+  const float dv = shrink_fraction * box.Height();
+  const int u0 = std::max(0, static_cast<int>(std::ceil(box.x_min + du)));
+  const int v0 = std::max(0, static_cast<int>(std::ceil(box.y_min + dv)));
+  const int u1 = std::min(segmentation.width - 1, static_cast<int>(box.x_max - du));
+  const int v1 = std::min(segmentation.height - 1, static_cast<int>(box.y_max - dv));
+  std::vector<int> count(segmentation.num_segments, 0);
+  int valid = 0;
+  for (int v = v0; v <= v1; ++v) {
+    for (int u = u0; u <= u1; ++u) {
+      const int label = segmentation.labels[v * segmentation.width + u];
+      if (label < 0) continue;
+      ++valid;
+      if (segmentation.segment_is_plane[label]) ++count[label];
+    }
+  }
+  std::vector<int> pixels;
+  if (count.empty()) return pixels;
+  const int plane = static_cast<int>(std::max_element(count.begin(), count.end()) - count.begin());
+  if (count[plane] * 2 < valid) return pixels;
+  for (int v = v0; v <= v1; ++v) {
+    for (int u = u0; u <= u1; ++u) {
+      if (segmentation.labels[v * segmentation.width + u] == plane) {
+        pixels.push_back(v * segmentation.width + u);
+      }
+    }
+  }
+  return pixels;
+}
+
+// Keeps the pixels inside the box grown by the detection-segment dilation. A segment that runs
+// beyond its box (two chairs side by side in one segment) cannot belong to the detection there.
+std::vector<int> CropToBox(std::vector<int> pixels, const BoundingBox2D& box, int width,
+                           const DetectionSegmentConfig& config) {
+  const float grow_u = config.dilation_px + config.dilation_fraction * box.Width();
+  const float grow_v = config.dilation_px + config.dilation_fraction * box.Height();
+  const BoundingBox2D grown{box.x_min - grow_u, box.y_min - grow_v, box.x_max + grow_u,
+                            box.y_max + grow_v};
+  pixels.erase(std::remove_if(pixels.begin(), pixels.end(),
+                              [&](int i) { return !Inside(grown, i % width, i / width); }),
+               pixels.end());
+  return pixels;
+}
+
+// The pixels of one detection: supporting surfaces take their plane, flat objects the part of
+// the plane in their box, everything else the segments SelectDetectionPixels picks.
+std::vector<int> DetectionPixels(const SegmentationResult& segmentation,
+                                 const OrganizedCloud& cloud_C, const BoundingBox2D& box,
+                                 int class_id, const MapperConfig& config) {
+  if (Contains(config.surface_classes, class_id)) {
+    std::vector<int> pixels = SurfacePlanePixels(segmentation, box);
+    if (!pixels.empty()) return pixels;
+  }
+  if (Contains(config.flat_classes, class_id)) {
+    std::vector<int> pixels = FlatObjectPixels(segmentation, box, config.flat_box_shrink_fraction);
+    if (!pixels.empty()) return pixels;
+  }
+  return SelectDetectionPixels(segmentation, cloud_C, box, config.detection_segment);
 }
 
 ColoredPoints SegmentPoints(const OrganizedCloud& cloud_C, const std::vector<int>& pixels,
@@ -97,11 +163,9 @@ std::vector<SegmentedDetection> SegmentDetections(
     const Detection& detection = detections[d];
     if (detection.score < config.min_detection_score || detection.box.Area() <= 0.f) continue;
     const BoundingBox2D box = ToDepthPixels(detection.box, frame.color, frame.depth);
-    std::vector<int> pixels =
-        SelectDetectionPixels(segmentation, cloud_C, box, config.detection_segment);
-    if (pixels.empty() && IsSurfaceClass(detection.class_id, config)) {
-      pixels = SurfacePlanePixels(segmentation, box);
-    }
+    const std::vector<int> pixels =
+        CropToBox(DetectionPixels(segmentation, cloud_C, box, detection.class_id, config), box,
+                  segmentation.width, config.detection_segment);
     if (pixels.empty()) continue;
     bool fused = false;
     for (std::size_t k = 0; k < segmented.size() && !fused; ++k) {
@@ -118,7 +182,7 @@ std::vector<SegmentedDetection> SegmentDetections(
     entry.observation.box = detection.box;
     entry.observation.class_scores = {{detection.class_id, detection.score}};
     claimed.emplace_back(pixels.begin(), pixels.end());
-    entry.pixels = std::move(pixels);
+    entry.pixels = pixels;
     segmented.push_back(std::move(entry));
   }
   return segmented;

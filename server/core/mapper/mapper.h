@@ -41,6 +41,15 @@ struct MapperConfig {
   /// Detections of these COCO classes may take a supporting-plane segment (a table's top is the
   /// plane the segmentation separates everything else from).
   std::vector<int> surface_classes = {60 /* dining table */, 59 /* bed */};
+  /// Detections of these COCO classes are often flat on a supporting plane (screens on walls,
+  /// keyboards and laptops on desks, sinks in counters): when plane pixels dominate their box,
+  /// they take the part of the plane the box covers. Small flat things (phones, remotes, books)
+  /// are left out: their spurious detections would turn patches of a table into objects.
+  std::vector<int> flat_classes = {62 /* tv */, 63 /* laptop */, 66 /* keyboard */, 71 /* sink */,
+                                   74 /* clock */};
+  /// Flat-object boxes shrink by this fraction of their size on every side before cropping the
+  /// plane (colour and depth are not registered, so box borders are unreliable).
+  float flat_box_shrink_fraction = 0.1f;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };

@@ -46,18 +46,13 @@ void VoxelModel::Insert(const VoxelModel& other) {
 }
 
 ColoredPoints VoxelModel::Points() const {
-  std::vector<std::pair<std::uint64_t, const Accumulator*>> sorted;
-  sorted.reserve(voxels_.size());
-  for (const auto& [key, voxel] : voxels_) sorted.emplace_back(key, &voxel);
-  std::sort(sorted.begin(), sorted.end(),
-            [](const auto& a, const auto& b) { return a.first < b.first; });
   ColoredPoints out;
-  out.points.reserve(sorted.size());
-  out.colors.reserve(sorted.size());
-  for (const auto& [key, voxel] : sorted) {
-    const double inv = 1.0 / voxel->count;
-    out.points.push_back((voxel->sum_xyz * inv).cast<float>());
-    const Eigen::Vector3d rgb = voxel->sum_rgb * inv;
+  out.points.reserve(voxels_.size());
+  out.colors.reserve(voxels_.size());
+  for (const auto& [key, voxel] : voxels_) {
+    const double inv = 1.0 / voxel.count;
+    out.points.push_back((voxel.sum_xyz * inv).cast<float>());
+    const Eigen::Vector3d rgb = voxel.sum_rgb * inv;
     out.colors.push_back({static_cast<std::uint8_t>(std::lround(rgb.x())),
                           static_cast<std::uint8_t>(std::lround(rgb.y())),
                           static_cast<std::uint8_t>(std::lround(rgb.z()))});

@@ -33,7 +33,8 @@ class VoxelModel {
   [[nodiscard]] bool empty() const { return voxels_.empty(); }
   [[nodiscard]] float voxel_size_m() const { return voxel_size_m_; }
 
-  /// One point per voxel (mean of what fell in it), in insertion-independent order.
+  /// One point per voxel (mean of what fell in it). The order is the container's: the same for
+  /// the same sequence of insertions.
   [[nodiscard]] ColoredPoints Points() const;
 
  private:
