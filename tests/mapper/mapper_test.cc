@@ -127,6 +127,38 @@ TEST_F(MapperScene, PoseUpdateRegeneratesObjectsAndOccupancy) {
   EXPECT_EQ(mapper.occupancy().Query(wall_point), VoxelState::kOccupied);
 }
 
+// The paper's failures: a keyboard flat on the desk is lost in depth noise, and a table, being
+// the supporting plane, has no segment of its own.
+TEST_F(MapperScene, FlatKeyboardAndTableBecomeObjects) {
+  const int kKeyboard = CocoClassId("keyboard");
+  const int kTable = CocoClassId("dining table");
+  boxes_.push_back({{-0.35, -0.2, 0.705}, {-0.2, 0.2, 0.713}, {20, 20, 20}});  // 8 mm keyboard
+  Mapper mapper{MapperConfig{}};
+  for (int view = 0; view < 3; ++view) {
+    std::vector<Detection> detections = CupDetections(view);
+    detections.push_back({Project(boxes_[4], Pose(view)), kKeyboard, 0.4f});
+    detections.push_back({Project(boxes_[0], Pose(view)), kTable, 0.3f});
+    KeyframeResult result;
+    std::string why;
+    ASSERT_TRUE(mapper.AddKeyframe(Frame(view), detections, &result, &why)) << why;
+    EXPECT_EQ(result.detections_used, 4) << "view " << view;
+  }
+  std::map<int, std::vector<const MapObject*>> by_class;
+  for (const MapObject* object : mapper.ConfirmedObjects())
+    by_class[object->Label()].push_back(object);
+  ASSERT_EQ(by_class[kKeyboard].size(), 1u);
+  ASSERT_EQ(by_class[kTable].size(), 1u);
+  ASSERT_EQ(by_class[kCup].size(), 2u);
+  const MapObject& keyboard = *by_class[kKeyboard][0];
+  EXPECT_NEAR(keyboard.centroid_W.x(), -0.275, 0.05);
+  EXPECT_NEAR(keyboard.centroid_W.y(), 0.0, 0.05);
+  EXPECT_LT(keyboard.max_W.x() - keyboard.min_W.x(), 0.25);  // the keyboard, not the table
+  const MapObject& table = *by_class[kTable][0];
+  EXPECT_GT(table.max_W.y() - table.min_W.y(), 1.0);  // most of the 1.6 m table top
+  EXPECT_NEAR(table.centroid_W.z(), 0.705, 0.02);
+  EXPECT_EQ(table.observations.size(), 3u);
+}
+
 TEST_F(MapperScene, BadInputIsRejectedAndChangesNothing) {
   Mapper mapper{MapperConfig{}};
   std::string why;
