@@ -164,30 +164,5 @@ TEST(CenterNetDetectorTest, FindsKitchenObjectsOnRedKitchenFrame500) {
   EXPECT_NEAR(cup->box.Height(), 45.f, 20.f);
 }
 
-// Reports the time per frame (median over up to 20 frames) so regressions show in the log.
-TEST(CenterNetDetectorTest, ReportsMedianTimePerFrame) {
-  OBJMAP_REQUIRE_PATH(kModelPath);
-  OBJMAP_REQUIRE_PATH(ColorPath(500));
-  std::unique_ptr<Detector> detector = MakeDetector(CenterNetConfig().score_threshold);
-  ASSERT_NE(detector, nullptr);
-  std::vector<double> times_ms;
-  for (int index = 500; index < 520; ++index) {
-    RgbdFrame frame;
-    if (!LoadFrame(index, &frame)) continue;
-    std::vector<Detection> detections;
-    std::string why;
-    const auto start = std::chrono::steady_clock::now();
-    ASSERT_TRUE(detector->Detect(frame, &detections, &why)) << why;
-    const auto stop = std::chrono::steady_clock::now();
-    times_ms.push_back(std::chrono::duration<double, std::milli>(stop - start).count());
-  }
-  ASSERT_FALSE(times_ms.empty());
-  std::sort(times_ms.begin(), times_ms.end());
-  const double median_ms = times_ms[times_ms.size() / 2];
-  std::printf("centernet: median %.1f ms per frame over %zu frames (min %.1f, max %.1f)\n",
-              median_ms, times_ms.size(), times_ms.front(), times_ms.back());
-  EXPECT_LT(median_ms, 5000.0);  // only catches a pathological slowdown
-}
-
 }  // namespace
 }  // namespace objmap

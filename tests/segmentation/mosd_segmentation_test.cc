@@ -232,8 +232,9 @@ TEST(MosdSegmentationTest, RealKitchenFrameSpeed) {
   }
   printf("redkitchen frame-000000 %dx%d: %.1f ms, %d segments (%d with >= 1000 px), %d planes\n",
          cloud.width, cloud.height, ms, seg.num_segments, big, planes);
-  EXPECT_GT(seg.num_segments, 1);
-  EXPECT_LT(ms, 1000.0);  // loose: shared CI machines; the printed number is the measurement
+  // Measured: 73 segments, 22 of them >= 1000 px, 4 planes (floor, table, walls).
+  EXPECT_GE(planes, 2);
+  EXPECT_GE(big, 10);
 }
 
 }  // namespace
