@@ -1,8 +1,18 @@
 #pragma once
-// Small geometric fixtures shared by the object and association tests.
+// Small geometric fixtures and a ray-cast RGB-D renderer shared by the tests.
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
 #include <vector>
+
+#include "types/detection.h"
+#include "types/frame.h"
 
 namespace objmap::testing {
 
@@ -23,15 +33,6 @@ inline std::vector<Eigen::Vector3f> BoxSurface(const Eigen::Vector3f& lo, const 
 }
 
 }  // namespace objmap::testing
-
-#include <Eigen/Geometry>
-#include <array>
-#include <cmath>
-#include <cstdint>
-#include <limits>
-#include <string>
-
-#include "types/frame.h"
 
 namespace objmap::testing {
 
@@ -95,6 +96,23 @@ inline RgbdFrame RenderFrame(const std::vector<SceneBox>& boxes, const CameraInt
     }
   }
   return frame;
+}
+
+/// The detection box of a scene box seen from T_W_C: the bounds of its projected corners.
+inline BoundingBox2D ProjectBox(const SceneBox& box, const Eigen::Isometry3d& T_W_C,
+                                const CameraIntrinsics& K) {
+  BoundingBox2D out{1e9f, 1e9f, -1e9f, -1e9f};
+  for (int corner = 0; corner < 8; ++corner) {
+    const Eigen::Vector3d p_C =
+        T_W_C.inverse() * Eigen::Vector3d((corner & 1) ? box.hi.x() : box.lo.x(),
+                                          (corner & 2) ? box.hi.y() : box.lo.y(),
+                                          (corner & 4) ? box.hi.z() : box.lo.z());
+    const float u = static_cast<float>(K.fx * p_C.x() / p_C.z() + K.cx);
+    const float v = static_cast<float>(K.fy * p_C.y() / p_C.z() + K.cy);
+    out = {std::min(out.x_min, u), std::min(out.y_min, v), std::max(out.x_max, u),
+           std::max(out.y_max, v)};
+  }
+  return out;
 }
 
 /// Camera at `eye` looking at `target`, with world +z up (camera y points down).

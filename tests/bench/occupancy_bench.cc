@@ -10,11 +10,11 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
-#include <opencv2/imgcodecs.hpp>
 #include <string>
 #include <vector>
 
+#include "dataset/sequence_reader.h"
+#include "types/organized_cloud.h"
 #include "occupancy/occupancy_map.h"
 #include "occupancy/octree_compare.h"
 
@@ -23,7 +23,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 struct Args {
-  std::string data_dir = "/work/shared/data/redkitchen";
+  std::string data_dir = "../shared/data/redkitchen";
   int keyframes = 10;
   int stride = 10;
   int stock_keyframes = 2;
@@ -35,41 +35,22 @@ double MsSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
-std::string FramePath(const Args& args, int index, const char* suffix) {
-  char name[64];
-  std::snprintf(name, sizeof(name), "/frame-%06d.%s", index, suffix);
-  return args.data_dir + name;
-}
-
-bool ReadPose(const std::string& path, Eigen::Matrix4f* T_W_C) {
-  std::ifstream in(path);
-  for (int r = 0; r < 4; ++r) {
-    for (int c = 0; c < 4; ++c) {
-      if (!(in >> (*T_W_C)(r, c))) return false;
-    }
-  }
-  return true;
-}
-
-// Back-projects every valid depth pixel (7-Scenes: 16-bit mm, 0 and 65535 invalid) to world.
-bool LoadScan(const Args& args, int index, objmap::ScanW* scan) {
-  const cv::Mat depth = cv::imread(FramePath(args, index, "depth.png"), cv::IMREAD_ANYDEPTH);
-  Eigen::Matrix4f T_W_C;
-  if (depth.empty() || depth.type() != CV_16U ||
-      !ReadPose(FramePath(args, index, "pose.txt"), &T_W_C)) {
+// Every valid depth pixel of frame `index`, in the world frame, read through the dataset reader.
+bool LoadScan(const objmap::SequenceReader& reader, int index, objmap::ScanW* scan) {
+  objmap::RgbdFrame frame;
+  std::string why;
+  if (!reader.ReadFrame(static_cast<std::size_t>(index), &frame, &why)) {
+    std::fprintf(stderr, "occupancy_bench: %s\n", why.c_str());
     return false;
   }
-  constexpr float kF = 585.0f, kCx = 320.0f, kCy = 240.0f;
-  const Eigen::Matrix3f R = T_W_C.topLeftCorner<3, 3>();
-  scan->origin_W = T_W_C.topRightCorner<3, 1>();
+  const objmap::OrganizedCloud cloud_C =
+      objmap::BackProject(frame.depth, objmap::ColorImage{}, frame.intrinsics);
+  const Eigen::Isometry3f T_W_C = frame.T_W_C.cast<float>();
+  scan->origin_W = T_W_C.translation();
   scan->structure_points_W.clear();
-  for (int v = 0; v < depth.rows; ++v) {
-    for (int u = 0; u < depth.cols; ++u) {
-      const std::uint16_t mm = depth.at<std::uint16_t>(v, u);
-      if (mm == 0 || mm == 65535) continue;
-      const float z = mm * 0.001f;
-      const Eigen::Vector3f p_C((u - kCx) * z / kF, (v - kCy) * z / kF, z);
-      scan->structure_points_W.push_back(R * p_C + scan->origin_W);
+  for (std::size_t i = 0; i < cloud_C.size(); ++i) {
+    if (cloud_C.IsValid(static_cast<int>(i))) {
+      scan->structure_points_W.push_back(T_W_C * cloud_C.points_C[i]);
     }
   }
   return true;
@@ -124,14 +105,11 @@ struct Totals {
 };
 
 // Integrates one keyframe with objmap (and with stock OctoMap for the first ones).
-bool RunKeyframe(const Args& args, int k, objmap::OccupancyMap* map, octomap::OcTree* stock,
-                 Totals* totals) {
+bool RunKeyframe(const Args& args, const objmap::SequenceReader& reader, int k,
+                 objmap::OccupancyMap* map, octomap::OcTree* stock, Totals* totals) {
   objmap::ScanW scan;
   const int index = k * args.stride;
-  if (!LoadScan(args, index, &scan)) {
-    std::printf("cannot read frame %d under %s\n", index, args.data_dir.c_str());
-    return false;
-  }
+  if (!LoadScan(reader, index, &scan)) return false;
   const Clock::time_point start = Clock::now();
   map->Integrate(scan);
   const double ms = MsSince(start);
@@ -155,6 +133,12 @@ bool RunKeyframe(const Args& args, int k, objmap::OccupancyMap* map, octomap::Oc
 
 int main(int argc, char** argv) {
   const Args args = ParseArgs(argc, argv);
+  std::string why;
+  const auto reader = objmap::OpenSequence(args.data_dir, &why);
+  if (!reader) {
+    std::fprintf(stderr, "occupancy_bench: %s\n", why.c_str());
+    return 1;
+  }
   objmap::OccupancyConfig config;
   config.max_range_m = args.max_range_m;
   config.one_ray_per_end_voxel = args.one_ray_per_end_voxel;
@@ -162,7 +146,7 @@ int main(int argc, char** argv) {
   octomap::OcTree stock(config.resolution_m);
   Totals totals;
   for (int k = 0; k < args.keyframes; ++k) {
-    if (!RunKeyframe(args, k, &map, &stock, &totals)) break;
+    if (!RunKeyframe(args, *reader, k, &map, &stock, &totals)) break;
     if (k + 1 == args.stock_keyframes) PrintAgreement(map, stock);
   }
   if (totals.done == 0) return 1;

@@ -69,8 +69,10 @@ class CliScene : public ::testing::Test {
       WriteFrame(i, frame);
       const std::string name = "frame-00000" + std::to_string(i);
       for (int cup = 1; cup <= 2; ++cup) {
-        const auto box = Project(boxes[cup], T_W_C, K);
-        detections["frames"][name].push_back({{"box", box}, {"class", "cup"}, {"score", 0.6}});
+        const BoundingBox2D box = testing::ProjectBox(boxes[cup], T_W_C, K);
+        detections["frames"][name].push_back({{"box", {box.x_min, box.y_min, box.x_max, box.y_max}},
+                                              {"class", "cup"},
+                                              {"score", 0.6}});
       }
     }
     std::ofstream(Path("detections.json")) << detections.dump();
@@ -95,21 +97,6 @@ class CliScene : public ::testing::Test {
     cv::imwrite(stem + ".depth.png", depth);
     cv::imwrite(stem + ".color.png", color);
     std::ofstream(stem + ".pose.txt") << PoseText(frame.T_W_C);
-  }
-
-  static std::array<float, 4> Project(const SceneBox& box, const Eigen::Isometry3d& T_W_C,
-                                      const CameraIntrinsics& K) {
-    std::array<float, 4> out{1e9f, 1e9f, -1e9f, -1e9f};
-    for (int corner = 0; corner < 8; ++corner) {
-      const Eigen::Vector3d p_C =
-          T_W_C.inverse() * Eigen::Vector3d((corner & 1) ? box.hi.x() : box.lo.x(),
-                                            (corner & 2) ? box.hi.y() : box.lo.y(),
-                                            (corner & 4) ? box.hi.z() : box.lo.z());
-      const float u = static_cast<float>(K.fx * p_C.x() / p_C.z() + K.cx);
-      const float v = static_cast<float>(K.fy * p_C.y() / p_C.z() + K.cy);
-      out = {std::min(out[0], u), std::min(out[1], v), std::max(out[2], u), std::max(out[3], v)};
-    }
-    return out;
   }
 
   std::string MapArguments(const std::string& extra) const {

@@ -29,20 +29,8 @@ class MapperScene : public ::testing::Test {
     eyes_ = {{-1.0, 0.0, 1.3}, {-1.0, 0.25, 1.3}, {-0.95, -0.25, 1.35}};
   }
 
-  // The detection box of a scene box: its projected corners.
   BoundingBox2D Project(const SceneBox& box, const Eigen::Isometry3d& T_W_C) const {
-    BoundingBox2D out{1e9f, 1e9f, -1e9f, -1e9f};
-    for (int corner = 0; corner < 8; ++corner) {
-      const Eigen::Vector3d p_W((corner & 1) ? box.hi.x() : box.lo.x(),
-                                (corner & 2) ? box.hi.y() : box.lo.y(),
-                                (corner & 4) ? box.hi.z() : box.lo.z());
-      const Eigen::Vector3d p_C = T_W_C.inverse() * p_W;
-      const float u = static_cast<float>(K_.fx * p_C.x() / p_C.z() + K_.cx);
-      const float v = static_cast<float>(K_.fy * p_C.y() / p_C.z() + K_.cy);
-      out = {std::min(out.x_min, u), std::min(out.y_min, v), std::max(out.x_max, u),
-             std::max(out.y_max, v)};
-    }
-    return out;
+    return testing::ProjectBox(box, T_W_C, K_);
   }
 
   Eigen::Isometry3d Pose(int view) const {

@@ -16,8 +16,8 @@
 #include <filesystem>
 #include <map>
 #include <numeric>
-#include <opencv2/imgcodecs.hpp>
 
+#include "dataset/sequence_reader.h"
 #include "pointcloud_io/pointcloud_io.h"
 #include "segmentation/segmenter.h"
 #include "test_data.h"
@@ -197,22 +197,15 @@ TEST(MosdSegmentationTest, DetectionBoxesSelectTheirObjects) {
   EXPECT_GE(recall_sum / objects, 0.93);
 }
 
-TEST(MosdSegmentationTest, RealKitchenFrameSpeed) {
-  const std::string path = testing::SharedDataPath("redkitchen/frame-000000.depth.png");
-  OBJMAP_REQUIRE_PATH(path);
-  const cv::Mat depth_mm = cv::imread(path, cv::IMREAD_ANYDEPTH);
-  ASSERT_EQ(depth_mm.type(), CV_16UC1);
-  DepthImage depth;
-  depth.width = depth_mm.cols;
-  depth.height = depth_mm.rows;
-  for (int v = 0; v < depth.height; ++v) {
-    for (int u = 0; u < depth.width; ++u) {
-      const std::uint16_t mm = depth_mm.at<std::uint16_t>(v, u);
-      // 65535 marks missing depth in 7-Scenes.
-      depth.depth_m.push_back(mm == 0 || mm == 65535 ? 0.f : mm * 0.001f);
-    }
-  }
-  const OrganizedCloud cloud = BackProject(depth, ColorImage(), CameraIntrinsics());
+TEST(MosdSegmentationTest, RealKitchenFrame) {
+  const std::string folder = testing::SharedDataPath("redkitchen");
+  OBJMAP_REQUIRE_PATH(folder);
+  std::string why;
+  const auto reader = OpenSequence(folder, &why);
+  ASSERT_NE(reader, nullptr) << why;
+  RgbdFrame frame;
+  ASSERT_TRUE(reader->ReadFrame(0, &frame, &why)) << why;
+  const OrganizedCloud cloud = BackProject(frame.depth, ColorImage(), frame.intrinsics);
   const Segmenter segmenter{SegmenterConfig()};
   SegmentationResult seg = segmenter.Segment(cloud);  // warm-up
   const int runs = 5;
