@@ -65,8 +65,10 @@ inline double RayBoxHit(const Eigen::Vector3d& origin, const Eigen::Vector3d& di
 }
 
 /// Renders a pinhole RGB-D frame of `boxes` seen from T_W_C (depth along the optical axis).
+/// `owner`, when given, receives per pixel the index of the box it shows (-1 for none).
 inline RgbdFrame RenderFrame(const std::vector<SceneBox>& boxes, const CameraIntrinsics& K,
-                             const Eigen::Isometry3d& T_W_C, const std::string& name) {
+                             const Eigen::Isometry3d& T_W_C, const std::string& name,
+                             std::vector<int>* owner = nullptr) {
   RgbdFrame frame;
   frame.name = name;
   frame.intrinsics = K;
@@ -75,22 +77,25 @@ inline RgbdFrame RenderFrame(const std::vector<SceneBox>& boxes, const CameraInt
   frame.depth.height = frame.color.height = K.height;
   frame.depth.depth_m.assign(static_cast<size_t>(K.width) * K.height, 0.f);
   frame.color.rgb.assign(static_cast<size_t>(K.width) * K.height * 3, 0);
+  if (owner != nullptr) owner->assign(static_cast<size_t>(K.width) * K.height, -1);
   const Eigen::Vector3d origin = T_W_C.translation();
   for (int v = 0; v < K.height; ++v) {
     for (int u = 0; u < K.width; ++u) {
       const Eigen::Vector3d ray_C((u - K.cx) / K.fx, (v - K.cy) / K.fy, 1.0);
       const Eigen::Vector3d ray_W = T_W_C.linear() * ray_C;
       double best = std::numeric_limits<double>::infinity();
-      const SceneBox* hit = nullptr;
-      for (const SceneBox& box : boxes) {
-        const double t = RayBoxHit(origin, ray_W, box);
+      int hit_index = -1;
+      for (size_t b = 0; b < boxes.size(); ++b) {
+        const double t = RayBoxHit(origin, ray_W, boxes[b]);
         if (t < best) {
           best = t;
-          hit = &box;
+          hit_index = static_cast<int>(b);
         }
       }
-      if (hit == nullptr) continue;
+      if (hit_index < 0) continue;
+      const SceneBox* hit = &boxes[hit_index];
       const size_t i = static_cast<size_t>(v) * K.width + u;
+      if (owner != nullptr) (*owner)[i] = hit_index;
       frame.depth.depth_m[i] = static_cast<float>(best);  // ray_C has z = 1: t is the depth
       for (int c = 0; c < 3; ++c) frame.color.rgb[3 * i + c] = hit->rgb[c];
     }
