@@ -33,6 +33,8 @@ constexpr char kMapUsage[] =
     "  --every-frame             every frame is a keyframe\n"
     "  --min-observations N      inventory: keyframes an object needs (default 3)\n"
     "  --min-confidence C        inventory: confidence an object needs (default 0.2)\n"
+    "  --min-detection-rate R    inventory: share of the keyframes seeing an object that must\n"
+    "                            detect it (default 0.5; 0 = the paper's rule)\n"
     "  --stop-on-error           stop at the first bad frame instead of skipping it\n";
 
 // Wraps a detector and keeps what it found per frame, for --save-detections.
@@ -114,7 +116,8 @@ void PrintSummary(const Mapper& mapper, const SequenceRunReport& report, double 
   std::cout << "objects in the map: " << mapper.objects().size()
             << ", in the inventory (>= " << mapper.config().inventory.min_observations
             << " observations, confidence >= " << mapper.config().inventory.min_confidence
-            << "): " << mapper.ConfirmedObjects().size() << "\n\n";
+            << ", detected in >= " << mapper.config().inventory.min_detection_rate
+            << " of the keyframes seeing them): " << mapper.ConfirmedObjects().size() << "\n\n";
   std::cout << std::left << std::setw(16) << "class" << std::right << std::setw(6) << "count"
             << std::setw(17) << "mean confidence"
             << "\n";
@@ -148,6 +151,8 @@ MapperConfig MapperConfigFrom(Arguments& args) {
       static_cast<int>(args.GetNumber("--min-observations", config.inventory.min_observations));
   config.inventory.min_confidence =
       static_cast<float>(args.GetNumber("--min-confidence", config.inventory.min_confidence));
+  config.inventory.min_detection_rate = static_cast<float>(
+      args.GetNumber("--min-detection-rate", config.inventory.min_detection_rate));
   return config;
 }
 
@@ -175,7 +180,7 @@ int RunMapCommand(int argc, char** argv) {
   Arguments args(argc, argv,
                  {"--out", "--model", "--detections", "--save-detections", "--score-threshold",
                   "--first-frame", "--max-frames", "--min-translation", "--min-rotation",
-                  "--min-observations", "--min-confidence"},
+                  "--min-observations", "--min-confidence", "--min-detection-rate"},
                  {"--every-frame", "--stop-on-error", "--help"});
   if (args.Has("--help")) {
     std::cout << kMapUsage;

@@ -78,6 +78,37 @@ TEST_F(MapperScene, TwoCupsSeenThriceAreTwoObjects) {
   EXPECT_NE(ObjectsJson(mapper).find("\"class\": \"cup\""), std::string::npos);
 }
 
+TEST_F(MapperScene, ObjectsRarelyDetectedWhereSeenAreLeftOutOfTheInventory) {
+  MapperConfig config;
+  config.inventory.min_observations = 1;
+  Mapper mapper{config};
+  for (int view = 0; view < 3; ++view) {
+    std::vector<Detection> detections = CupDetections(view);
+    if (view > 0) detections.pop_back();  // the second cup is detected in one view of three
+    KeyframeResult result;
+    std::string why;
+    ASSERT_TRUE(mapper.AddKeyframe(Frame(view), detections, &result, &why)) << why;
+  }
+  ASSERT_EQ(mapper.objects().size(), 2u);
+  for (const auto& [id, object] : mapper.objects().objects()) {
+    EXPECT_EQ(mapper.KeyframesSeeing(object), 3) << "both cups are in every view";
+  }
+  const auto confirmed = mapper.ConfirmedObjects();
+  ASSERT_EQ(confirmed.size(), 1u);
+  EXPECT_EQ(confirmed[0]->observations.size(), 3u);
+
+  config.inventory.min_detection_rate = 0.f;  // the paper's rule keeps both
+  Mapper paper_mapper{config};
+  for (int view = 0; view < 3; ++view) {
+    std::vector<Detection> detections = CupDetections(view);
+    if (view > 0) detections.pop_back();
+    KeyframeResult result;
+    std::string why;
+    ASSERT_TRUE(paper_mapper.AddKeyframe(Frame(view), detections, &result, &why)) << why;
+  }
+  EXPECT_EQ(paper_mapper.ConfirmedObjects().size(), 2u);
+}
+
 TEST_F(MapperScene, OccupancyHoldsStructureNotObjects) {
   Mapper mapper{MapperConfig{}};
   MapAllViews(&mapper);

@@ -13,7 +13,7 @@ namespace {
 
 nlohmann::json Vector(const Eigen::Vector3f& v) { return {v.x(), v.y(), v.z()}; }
 
-nlohmann::json ObjectJson(const MapObject& object, bool in_inventory) {
+nlohmann::json ObjectJson(const MapObject& object, bool in_inventory, int keyframes_seeing) {
   nlohmann::json scores = nlohmann::json::object();
   for (int c = 0; c < kNumCocoClasses; ++c) {
     if (object.accumulated_scores[c] > 0.f) {
@@ -38,6 +38,7 @@ nlohmann::json ObjectJson(const MapObject& object, bool in_inventory) {
           {"confidence", object.Confidence()},
           {"in_inventory", in_inventory},
           {"scores", scores},
+          {"keyframes_seeing", keyframes_seeing},
           {"observations", observations},
           {"centroid", Vector(object.centroid_W)},
           {"bbox_min", Vector(object.min_W)},
@@ -57,7 +58,7 @@ std::string ObjectsJson(const Mapper& mapper) {
   const std::set<ObjectId> confirmed = ConfirmedIds(mapper);
   nlohmann::json objects = nlohmann::json::array();
   for (const auto& [id, object] : mapper.objects().objects()) {
-    objects.push_back(ObjectJson(object, confirmed.count(id) > 0));
+    objects.push_back(ObjectJson(object, confirmed.count(id) > 0, mapper.KeyframesSeeing(object)));
   }
   nlohmann::json inventory = nlohmann::json::array();
   for (const InventoryEntry& entry : mapper.Inventory()) {

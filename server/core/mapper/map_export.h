@@ -8,8 +8,8 @@ namespace objmap {
 
 /// Writes a mapping result into `out_dir` (created if needed):
 ///  - map.bt: the occupancy of the non-object structure (standard OctoMap binary, octovis opens it)
-///  - objects.json: every object (id, class, confidence, per-class scores, observations, centroid,
-///    bounding box, in_inventory)
+///  - objects.json: every object (id, class, confidence, per-class scores, observations, the
+///    number of keyframes whose view holds it, centroid, bounding box, in_inventory)
 ///  - objects/<id>_<class>.ply: the coloured 5 mm model of every object in the inventory.
 /// False with a reason naming the file on any I/O error.
 [[nodiscard]] bool WriteMapOutputs(const Mapper& mapper, const std::string& out_dir,

@@ -81,6 +81,10 @@ bool InventoryConfig::IsValid(std::string* why) const {
     *why = "InventoryConfig: min_observations must be >= 1 and min_confidence in [0, 1]";
     return false;
   }
+  if (!(min_detection_rate >= 0.f && min_detection_rate <= 1.f) || !(occlusion_margin_m >= 0.f)) {
+    *why = "InventoryConfig: min_detection_rate must be in [0, 1] and occlusion_margin_m >= 0";
+    return false;
+  }
   return true;
 }
 
@@ -219,14 +223,38 @@ bool Mapper::UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses, s
   return true;
 }
 
+int Mapper::KeyframesSeeing(const MapObject& object) const {
+  const Eigen::Vector3d centroid_W = object.centroid_W.cast<double>();
+  int seeing = 0;
+  for (const auto& [id, record] : impl_->keyframes) {
+    const Eigen::Vector3d c_C = record.T_W_C.inverse() * centroid_W;
+    if (c_C.z() <= 0.0) continue;
+    const CameraIntrinsics& K = record.intrinsics;
+    const int u = static_cast<int>(std::lround(K.fx * c_C.x() / c_C.z() + K.cx));
+    const int v = static_cast<int>(std::lround(K.fy * c_C.y() / c_C.z() + K.cy));
+    if (u < 0 || v < 0 || u >= K.width || v >= K.height) continue;
+    const std::uint16_t depth_mm = record.depth_mm[static_cast<std::size_t>(v) * K.width + u];
+    if (depth_mm == 0) continue;  // no depth: cannot tell whether it is occluded
+    if (depth_mm * 0.001 < c_C.z() - impl_->config.inventory.occlusion_margin_m) continue;
+    ++seeing;
+  }
+  return seeing;
+}
+
 std::vector<const MapObject*> Mapper::ConfirmedObjects() const {
   std::vector<const MapObject*> confirmed;
   const InventoryConfig& thresholds = impl_->config.inventory;
   for (const auto& [id, object] : impl_->objects.objects()) {
-    if (static_cast<int>(object.observations.size()) >= thresholds.min_observations &&
-        object.Confidence() >= thresholds.min_confidence) {
-      confirmed.push_back(&object);
+    const int observed = static_cast<int>(object.Keyframes().size());
+    if (static_cast<int>(object.observations.size()) < thresholds.min_observations ||
+        object.Confidence() < thresholds.min_confidence) {
+      continue;
     }
+    if (thresholds.min_detection_rate > 0.f &&
+        observed < thresholds.min_detection_rate * std::max(observed, KeyframesSeeing(object))) {
+      continue;
+    }
+    confirmed.push_back(&object);
   }
   return confirmed;
 }

@@ -22,6 +22,13 @@ struct InventoryConfig {
   int min_observations = 3;
   /// Objects whose confidence (max accumulated score / observations) is lower are left out.
   float min_confidence = 0.2f;
+  /// Objects detected in fewer than this share of the keyframes whose view holds their centroid
+  /// unoccluded are left out: a one-off mistake repeated a few times over a long sequence is
+  /// still rare, a real object is detected in a good part of the views that see it. 0 disables.
+  float min_detection_rate = 0.5f;
+  /// A keyframe sees an object when the depth at its centroid's pixel is at most this much in
+  /// front of the centroid (otherwise something occludes it), metres.
+  float occlusion_margin_m = 0.15f;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
@@ -97,6 +104,9 @@ class Mapper {
   /// occupancy map from the stored keyframe clouds. Unknown ids or bad poses: false, map unchanged.
   [[nodiscard]] bool UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses,
                                  std::string* why);
+
+  /// Keyframes whose view holds the object's centroid, unoccluded (InventoryConfig).
+  [[nodiscard]] int KeyframesSeeing(const MapObject& object) const;
 
   /// Objects that pass the inventory thresholds, by id.
   [[nodiscard]] std::vector<const MapObject*> ConfirmedObjects() const;
