@@ -161,7 +161,7 @@ TEST_F(CliScene, EmptyOrMissingInputIsAClearError) {
 TEST(CliSegment, WritesOneLabelPerPoint) {
   const std::string cloud = testing::SharedDataPath("mosd-learn/learn0.pcd");
   OBJMAP_REQUIRE_PATH(cloud);
-  const std::string out = (fs::temp_directory_path() / "objmap_cli_segment.pcd").string();
+  const std::string out = (fs::temp_directory_path() / ("objmap_cli_segment_" + std::to_string(::getpid()) + ".pcd")).string();
   const CommandResult run = RunObjmap("segment " + cloud + " --out " + out);
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_NE(run.output.find("640x480"), std::string::npos) << run.output;

@@ -1,4 +1,5 @@
 #include <gtest/gtest.h>
+#include <unistd.h>
 #include <octomap/OcTree.h>
 
 #include <cmath>
@@ -183,7 +184,7 @@ testing::LeafComparison CompareWithStock(const OccupancyConfig& config) {
     stock.insertPointCloud(cloud, octomap::point3d(origins[s].x(), origins[s].y(), origins[s].z()),
                            config.max_range_m);
   }
-  const std::string path = ::testing::TempDir() + "/objmap_occupancy_compare.bt";
+  const std::string path = ::testing::TempDir() + "/objmap_occupancy_compare_" + std::to_string(::getpid()) + ".bt";
   std::string why;
   EXPECT_TRUE(map.WriteBinary(path, &why)) << why;
   octomap::OcTree ours(path);
@@ -217,7 +218,7 @@ TEST(OccupancyMap, WriteBinaryReadsBackWithTheSameCounts) {
   map.Integrate(SyntheticScan(3, Eigen::Vector3f(0.0f, 0.0f, 0.0f)));
   const OccupancyCounts counts = map.Counts();
   ASSERT_GT(counts.occupied, 0u);
-  const std::string path = ::testing::TempDir() + "/objmap_occupancy_roundtrip.bt";
+  const std::string path = ::testing::TempDir() + "/objmap_occupancy_roundtrip_" + std::to_string(::getpid()) + ".bt";
   std::string why;
   ASSERT_TRUE(map.WriteBinary(path, &why)) << why;
   octomap::OcTree read_back(path);
