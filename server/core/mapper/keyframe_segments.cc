@@ -84,10 +84,7 @@ std::vector<int> FlatObjectPixels(const SegmentationResult& segmentation, const 
 // beyond its box (two chairs side by side in one segment) cannot belong to the detection there.
 std::vector<int> CropToBox(std::vector<int> pixels, const BoundingBox2D& box, int width,
                            const DetectionSegmentConfig& config) {
-  const float grow_u = config.dilation_px + config.dilation_fraction * box.Width();
-  const float grow_v = config.dilation_px + config.dilation_fraction * box.Height();
-  const BoundingBox2D grown{box.x_min - grow_u, box.y_min - grow_v, box.x_max + grow_u,
-                            box.y_max + grow_v};
+  const BoundingBox2D grown = DilateDetectionBox(box, config);
   pixels.erase(std::remove_if(pixels.begin(), pixels.end(),
                               [&](int i) { return !Inside(grown, i % width, i / width); }),
                pixels.end());

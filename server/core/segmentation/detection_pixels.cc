@@ -35,15 +35,20 @@ struct SegmentStats {
   }
 };
 
-PixelBox DilateAndClip(const BoundingBox2D& box, int width, int height, float dilation_px,
-                       float dilation_fraction) {
+BoundingBox2D Grow(const BoundingBox2D& box, float dilation_px, float dilation_fraction) {
   const float grow_u = dilation_px + dilation_fraction * box.Width();
   const float grow_v = dilation_px + dilation_fraction * box.Height();
+  return {box.x_min - grow_u, box.y_min - grow_v, box.x_max + grow_u, box.y_max + grow_v};
+}
+
+PixelBox DilateAndClip(const BoundingBox2D& box, int width, int height, float dilation_px,
+                       float dilation_fraction) {
+  const BoundingBox2D grown = Grow(box, dilation_px, dilation_fraction);
   auto clip = [](float x, int hi) {
     return std::clamp(static_cast<int>(std::floor(x)), 0, hi - 1);
   };
-  return {clip(box.x_min - grow_u, width), clip(box.y_min - grow_v, height),
-          clip(box.x_max + grow_u, width), clip(box.y_max + grow_v, height)};
+  return {clip(grown.x_min, width), clip(grown.y_min, height), clip(grown.x_max, width),
+          clip(grown.y_max, height)};
 }
 
 std::vector<SegmentStats> CollectStats(const SegmentationResult& seg, const OrganizedCloud& cloud,
@@ -127,6 +132,10 @@ bool DetectionSegmentConfig::IsValid(std::string* why) const {
     return fail("fallback_inside_fraction");
   }
   return true;
+}
+
+BoundingBox2D DilateDetectionBox(const BoundingBox2D& box, const DetectionSegmentConfig& config) {
+  return Grow(box, config.dilation_px, config.dilation_fraction);
 }
 
 std::vector<int> SelectDetectionPixels(const SegmentationResult& segmentation,

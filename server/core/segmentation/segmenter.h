@@ -95,6 +95,11 @@ struct DetectionSegmentConfig {
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
 
+/// The detection box grown by the config's dilation (not clipped to the image): the region the
+/// object's pixels may occupy when colour and depth are not registered.
+[[nodiscard]] BoundingBox2D DilateDetectionBox(const BoundingBox2D& box,
+                                               const DetectionSegmentConfig& config);
+
 /// Pixel indices (into the organized cloud) of the object a detection box shows: the
 /// non-plane segment(s) that lie mostly inside the box. Box is in depth-image pixels.
 /// Empty when nothing in the box qualifies (or when segmentation and cloud sizes differ).
