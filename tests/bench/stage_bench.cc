@@ -13,6 +13,7 @@
 
 #include "dataset/sequence_reader.h"
 #include "detection/centernet_detector.h"
+#include "pipeline/sequence_runner.h"
 #include "segmentation/segmenter.h"
 
 namespace {
@@ -21,12 +22,6 @@ using Clock = std::chrono::steady_clock;
 
 double Ms(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
 }
 
 // PCL's supervoxels with the parameters of its tutorial scaled to a Kinect frame.
@@ -98,13 +93,14 @@ int main(int argc, char** argv) {
     std::printf("\n");
   }
   std::printf("\nmedian over %zu frames: detection %.1f ms, objmap segmentation %.1f ms\n",
-              segmentation_ms.size(), Median(detection_ms), Median(segmentation_ms));
+              segmentation_ms.size(), objmap::Median(detection_ms),
+              objmap::Median(segmentation_ms));
   if (!pcl_ms.empty()) {
     std::printf(
         "PCL SupervoxelClustering alone %.1f ms vs objmap whole segmentation %.1f ms on "
         "the same %zu frames: %.1fx\n",
-        Median(pcl_ms), Median(segmentation_on_pcl_frames_ms), pcl_ms.size(),
-        Median(pcl_ms) / Median(segmentation_on_pcl_frames_ms));
+        objmap::Median(pcl_ms), objmap::Median(segmentation_on_pcl_frames_ms), pcl_ms.size(),
+        objmap::Median(pcl_ms) / objmap::Median(segmentation_on_pcl_frames_ms));
   }
   return 0;
 }

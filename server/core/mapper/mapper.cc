@@ -39,19 +39,19 @@ std::vector<Eigen::Vector3f> ToWorld(const std::vector<Eigen::Vector3f>& points_
 }
 
 ScanW ToScan(const KeyframeRecord& record) {
-  const CameraIntrinsics& K = record.intrinsics;
+  DepthImage depth;
+  depth.width = record.intrinsics.width;
+  depth.height = record.intrinsics.height;
+  depth.depth_m.reserve(record.depth_mm.size());
+  for (std::uint16_t mm : record.depth_mm) depth.depth_m.push_back(mm * 0.001f);
+  const OrganizedCloud cloud_C = BackProject(depth, ColorImage{}, record.intrinsics);
   const Eigen::Isometry3f T_W_C = record.T_W_C.cast<float>();
   ScanW scan;
   scan.origin_W = T_W_C.translation();
-  for (int v = 0; v < K.height; ++v) {
-    for (int u = 0; u < K.width; ++u) {
-      const std::size_t i = static_cast<std::size_t>(v) * K.width + u;
-      if (record.depth_mm[i] == 0) continue;
-      const float z = record.depth_mm[i] * 0.001f;
-      const Eigen::Vector3f p_C(static_cast<float>((u - K.cx) / K.fx) * z,
-                                static_cast<float>((v - K.cy) / K.fy) * z, z);
-      (record.is_object[i] ? scan.object_points_W : scan.structure_points_W).push_back(T_W_C * p_C);
-    }
+  for (std::size_t i = 0; i < cloud_C.size(); ++i) {
+    if (!cloud_C.IsValid(static_cast<int>(i))) continue;
+    (record.is_object[i] ? scan.object_points_W : scan.structure_points_W)
+        .push_back(T_W_C * cloud_C.points_C[i]);
   }
   return scan;
 }
