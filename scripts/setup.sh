@@ -14,6 +14,8 @@ readonly JOBS="${OBJMAP_JOBS:-$(nproc)}"
 readonly PACKAGES=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev liboctomap-dev libpcl-dev libopencv-dev nlohmann-json3-dev
+  libsqlite3-dev libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc
+  libyaml-cpp-dev
   libgtest-dev libgmock-dev libbenchmark-dev
 )
 # Packages needed only for a command they provide: a machine may have that command from elsewhere

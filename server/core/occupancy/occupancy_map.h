@@ -53,6 +53,29 @@ struct IntegrationStats {
   double tree_update_ms = 0.0;      ///< applying the updates to the OcTree
 };
 
+/// Occupancy of an axis-aligned box at some resolution (cells of that size, aligned with the
+/// OcTree's grid, that intersect the box).
+struct RegionOccupancy {
+  double resolution_m = 0.0;  ///< cell size actually used (a power-of-two multiple of the leaf)
+  std::size_t occupied = 0;
+  std::size_t free = 0;
+  std::size_t unknown = 0;
+  struct Cell {
+    Eigen::Vector3d center_W;
+    VoxelState state = VoxelState::kUnknown;
+  };
+  std::vector<Cell> known_cells;  ///< free and occupied cells, when asked for (up to the limit)
+  bool truncated = false;         ///< more known cells than the limit
+};
+
+/// First voxel a ray meets.
+struct RayHit {
+  bool hit = false;
+  VoxelState state = VoxelState::kUnknown;  ///< kOccupied, or kUnknown when unknown stops rays
+  Eigen::Vector3d voxel_center_W = Eigen::Vector3d::Zero();
+  double distance_m = 0.0;  ///< from the origin to the voxel centre
+};
+
 /// Thread-safety: none. Callers serialize Integrate() against queries.
 class OccupancyMap {
  public:
@@ -69,6 +92,27 @@ class OccupancyMap {
 
   [[nodiscard]] VoxelState Query(const Eigen::Vector3d& point_W) const;
   [[nodiscard]] OccupancyCounts Counts() const;
+
+  /// Occupied / free / unknown cells of the box [min_W, max_W] at `resolution_m` (0: the map
+  /// resolution; otherwise rounded up to leaf * 2^k, at most 2^15 leaves). A coarse cell is
+  /// occupied when any leaf in it is, free when known and not occupied (OctoMap inner-node
+  /// semantics: max child occupancy). Lists known cells when `max_cells` > 0. The caller
+  /// validates min <= max.
+  [[nodiscard]] RegionOccupancy QueryRegion(const Eigen::Vector3d& min_W,
+                                            const Eigen::Vector3d& max_W, double resolution_m,
+                                            std::size_t max_cells) const;
+
+  /// Casts a ray from `origin_W` along `direction_W` (non-zero, need not be unit) up to
+  /// `max_range_m`; returns the first occupied voxel, or the first unknown one when
+  /// `unknown_stops`.
+  [[nodiscard]] RayHit CastRay(const Eigen::Vector3d& origin_W, const Eigen::Vector3d& direction_W,
+                               double max_range_m, bool unknown_stops) const;
+
+  /// The map, or the part of it whose leaves intersect [min_W, max_W] when `region` is true, as
+  /// the bytes of a standard OctoMap binary file (.bt) at the map resolution.
+  [[nodiscard]] std::string BinaryBytes(bool region, const Eigen::Vector3d& min_W,
+                                        const Eigen::Vector3d& max_W,
+                                        std::size_t* leaf_count) const;
 
   /// Writes the map as a standard OctoMap binary file (.bt, opens in octovis).
   [[nodiscard]] bool WriteBinary(const std::string& path, std::string* why) const;

@@ -1,0 +1,226 @@
+#pragma once
+
+#include <Eigen/Geometry>
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "detection/detector.h"
+#include "mapper/mapper.h"
+#include "objects/voxel_model.h"
+#include "occupancy/occupancy_map.h"
+#include "store/keyframe_store.h"
+#include "types/detection.h"
+#include "types/frame.h"
+
+namespace objmap {
+
+/// Outcome classes of server calls; transports map them onto their own codes (gRPC, ROS).
+enum class StatusCode {
+  kOk,
+  kInvalidArgument,     ///< the request is malformed; the message names the field
+  kNotFound,            ///< an id the map does not have
+  kResourceExhausted,   ///< the ingest queue is full; retry later
+  kUnavailable,         ///< the server is shutting down
+  kInternal,            ///< storage failed; the message says how
+};
+
+struct ServiceStatus {
+  StatusCode code = StatusCode::kOk;
+  std::string message;
+
+  [[nodiscard]] bool ok() const { return code == StatusCode::kOk; }
+  static ServiceStatus Ok() { return {}; }
+  static ServiceStatus Invalid(std::string message) {
+    return {StatusCode::kInvalidArgument, std::move(message)};
+  }
+  static ServiceStatus NotFound(std::string message) {
+    return {StatusCode::kNotFound, std::move(message)};
+  }
+};
+
+struct MapServerConfig {
+  MapperConfig mapper;
+  KeyframeStoreConfig store;
+  /// Keyframes and pose updates waiting for the mapping thread; AddKeyframe beyond this answers
+  /// kResourceExhausted instead of queueing without bound.
+  int max_queue = 64;
+  /// Map changes remembered for WatchMap / Inventory(since): older ones are summarized.
+  int change_history = 10000;
+  /// Largest region (volume, cubic metres) an occupancy query may cover at the map resolution.
+  double max_query_volume_m3 = 1000.0;
+  /// Most voxels one occupancy query lists.
+  int max_listed_voxels = 1000000;
+
+  [[nodiscard]] bool IsValid(std::string* why) const;
+};
+
+/// An immutable view of one object, shared between snapshots while the object does not change.
+struct ObjectView {
+  ObjectId id = 0;
+  int class_id = -1;  ///< label
+  float confidence = 0.f;
+  Eigen::Vector3f centroid_W = Eigen::Vector3f::Zero();
+  Eigen::Vector3f min_W = Eigen::Vector3f::Zero();
+  Eigen::Vector3f max_W = Eigen::Vector3f::Zero();
+  int observations = 0;
+  std::vector<KeyframeId> keyframes;
+  std::vector<std::pair<int, float>> scores;  ///< non-zero accumulated class scores, best first
+  bool confirmed = false;                     ///< passes the inventory thresholds
+  std::uint64_t changed_version = 0;          ///< map version of the last change
+  std::shared_ptr<const ColoredPoints> model_W;  ///< the 5 mm model, world frame
+};
+
+/// The map as queries see it: replaced as a whole after every change, never modified.
+struct MapSnapshot {
+  std::uint64_t version = 0;
+  std::size_t num_keyframes = 0;
+  std::map<ObjectId, std::shared_ptr<const ObjectView>> objects;
+  std::vector<InventoryEntry> inventory;  ///< confirmed objects per class, most frequent first
+};
+
+/// Object query; every set field must hold.
+struct ObjectFilter {
+  std::optional<int> class_id;
+  /// Objects whose centroid lies in [min, max].
+  std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> region;
+  float min_confidence = 0.f;
+  /// Results sorted by centroid distance to this point (otherwise by id).
+  std::optional<Eigen::Vector3d> nearest_to;
+  std::size_t max_results = 0;  ///< 0: all
+  bool include_unconfirmed = false;
+};
+
+struct AddKeyframeOutcome {
+  KeyframeId keyframe_id = 0;
+  std::uint64_t map_version = 0;
+  int detections_used = 0;
+  std::vector<ObjectId> created;
+  std::vector<ObjectId> updated;
+  std::vector<ObjectId> removed;  ///< absorbed by merges
+};
+
+struct PoseUpdateOutcome {
+  std::uint64_t map_version = 0;  ///< the version that holds the new poses
+  bool regenerated = false;       ///< waited and done
+  int keyframes_moved = 0;
+  double regeneration_ms = 0.0;
+};
+
+/// One change of the map, in version order.
+struct MapChange {
+  enum class Kind { kKeyframeAdded, kPosesUpdated };
+  std::uint64_t version = 0;
+  Kind kind = Kind::kKeyframeAdded;
+  KeyframeId keyframe_id = 0;  ///< for kKeyframeAdded
+  std::vector<ObjectId> added;
+  std::vector<ObjectId> updated;
+  std::vector<ObjectId> removed;
+};
+
+struct ServerStatus {
+  std::uint64_t map_version = 0;
+  std::size_t keyframes = 0;
+  std::size_t objects = 0;
+  std::size_t confirmed_objects = 0;
+  int queue_length = 0;
+  bool regenerating = false;
+  double last_regeneration_ms = 0.0;
+  std::uint64_t last_regeneration_version = 0;
+  std::string database;
+  std::uint64_t database_bytes = 0;
+  double uptime_s = 0.0;
+};
+
+/// The mapping server without transport: a durable store, one mapping thread that applies
+/// keyframes and pose updates in arrival order, and snapshots that queries read.
+///
+/// Thread-safety: every method may be called from any thread at any time. Writes (AddKeyframe,
+/// UpdatePoses) are queued and applied by the mapping thread in order; they return once the
+/// change is committed to the store (AddKeyframe) or the new poses are (UpdatePoses). Queries
+/// read the latest snapshot and never wait for a regeneration; occupancy queries wait at most
+/// for one keyframe's OctoMap update.
+class MapServer {
+ public:
+  /// Opens (or creates) the store at `db_path` and rebuilds the map from it: same keyframe and
+  /// object ids, labels and inventory as before the restart. `detector` (may be null) runs on
+  /// keyframes that come without detections. nullptr and a reason when the store cannot be used.
+  static std::unique_ptr<MapServer> Open(const MapServerConfig& config, const std::string& db_path,
+                                         std::unique_ptr<Detector> detector, std::string* why);
+  /// Finishes queued work and stops the mapping thread.
+  ~MapServer();
+  MapServer(const MapServer&) = delete;
+  MapServer& operator=(const MapServer&) = delete;
+
+  /// Validates the frame, maps it and commits it; returns when it is durable. `detections`
+  /// absent: the configured detector runs (no detector: no objects from this keyframe).
+  [[nodiscard]] ServiceStatus AddKeyframe(RgbdFrame frame,
+                                          std::optional<std::vector<Detection>> detections,
+                                          AddKeyframeOutcome* outcome);
+
+  /// Validates (known ids, finite rigid poses), stores the poses durably and queues the
+  /// regeneration; with `wait`, returns after it has been applied.
+  [[nodiscard]] ServiceStatus UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses,
+                                          bool wait, PoseUpdateOutcome* outcome);
+
+  /// The current snapshot (never null).
+  [[nodiscard]] std::shared_ptr<const MapSnapshot> Snapshot() const;
+
+  /// Objects matching the filter, from one snapshot (its version in `version`).
+  [[nodiscard]] ServiceStatus QueryObjects(const ObjectFilter& filter,
+                                           std::vector<std::shared_ptr<const ObjectView>>* objects,
+                                           std::uint64_t* version) const;
+  [[nodiscard]] ServiceStatus GetObject(ObjectId id, std::shared_ptr<const ObjectView>* object) const;
+
+  /// The inventory; with `since_version`, only classes with an object added, changed or
+  /// removed after it (a class whose last object went away comes with count 0).
+  [[nodiscard]] ServiceStatus Inventory(std::optional<std::uint64_t> since_version,
+                                        std::vector<InventoryEntry>* entries,
+                                        std::uint64_t* version) const;
+
+  /// Occupancy of a box (validated: finite, min <= max, volume limit).
+  [[nodiscard]] ServiceStatus QueryOccupancy(const Eigen::Vector3d& min_W,
+                                             const Eigen::Vector3d& max_W, double resolution_m,
+                                             bool list_voxels, std::size_t max_voxels,
+                                             RegionOccupancy* region, std::uint64_t* version) const;
+  /// True when the box has no occupied voxel and (unless `unknown_is_free`) no unknown one.
+  [[nodiscard]] ServiceStatus IsFree(const Eigen::Vector3d& min_W, const Eigen::Vector3d& max_W,
+                                     bool unknown_is_free, bool* free, RegionOccupancy* counts,
+                                     std::uint64_t* version) const;
+  [[nodiscard]] ServiceStatus CastRay(const Eigen::Vector3d& origin_W,
+                                      const Eigen::Vector3d& direction_W, double max_range_m,
+                                      bool unknown_stops, RayHit* hit,
+                                      std::uint64_t* version) const;
+  /// The OctoMap (or the part in the box) as standard .bt bytes.
+  [[nodiscard]] ServiceStatus OctomapBytes(const std::optional<std::pair<Eigen::Vector3d,
+                                                                         Eigen::Vector3d>>& region,
+                                           std::string* bytes, std::size_t* leaf_count,
+                                           std::uint64_t* version) const;
+
+  [[nodiscard]] ServerStatus Status() const;
+
+  /// Changes with version > `since_version`, oldest first. Waits up to `timeout` when there are
+  /// none yet; returns empty on timeout or shutdown. When `since_version` is older than the
+  /// remembered history, the first change returned summarizes the forgotten ones.
+  [[nodiscard]] std::vector<MapChange> ChangesSince(std::uint64_t since_version,
+                                                    std::chrono::milliseconds timeout) const;
+
+  /// Stops accepting writes (kUnavailable), wakes every waiter, finishes queued work.
+  void Shutdown();
+  [[nodiscard]] bool shutting_down() const;
+
+ private:
+  MapServer();
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Checks a box: finite coordinates and min <= max on every axis; `field` names it in the reason.
+[[nodiscard]] bool ValidateBox(const Eigen::Vector3d& min_W, const Eigen::Vector3d& max_W,
+                               const std::string& field, std::string* why);
+
+}  // namespace objmap

@@ -1,0 +1,131 @@
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "objects/object_map.h"
+#include "types/detection.h"
+#include "types/frame.h"
+
+namespace objmap {
+
+/// What the store keeps of a keyframe: everything regeneration needs (pose, intrinsics, depth,
+/// which pixels belong to objects) plus the colour image and the detections, for export and audit.
+struct StoredKeyframe {
+  KeyframeId id = 0;
+  double stamp_s = 0.0;
+  std::string name;
+  Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
+  CameraIntrinsics intrinsics;
+  /// Row-major depth in millimetres (0: no depth), intrinsics.width * intrinsics.height values.
+  std::vector<std::uint16_t> depth_mm;
+  /// Row-major, one byte per pixel: 1 where the pixel belongs to an object segment.
+  std::vector<std::uint8_t> object_mask;
+  /// Empty, or intrinsics-sized RGB. Stored as JPEG (lossy): nothing is derived from it.
+  ColorImage color;
+  std::vector<Detection> detections;
+};
+
+/// One observation of one object (see ObjectObservation), with the object that holds it.
+struct StoredObservation {
+  ObjectId object_id = 0;
+  ObjectObservation observation;
+};
+
+/// Derived per-object facts kept for inspection with sqlite3 (the map itself is rebuilt from
+/// keyframes and observations).
+struct StoredObjectSummary {
+  ObjectId id = 0;
+  int class_id = -1;
+  float confidence = 0.f;
+  Eigen::Vector3f centroid_W = Eigen::Vector3f::Zero();
+  int observations = 0;
+};
+
+/// One atomic change of the store: everything a mapping step did. Applied in one transaction:
+/// either all of it is on disk when Commit returns true, or none of it.
+struct StoreChange {
+  std::optional<StoredKeyframe> keyframe;          ///< a new keyframe
+  std::vector<StoredObservation> observations;     ///< observations to insert
+  /// (kept, absorbed): every observation of `absorbed` now belongs to `kept`.
+  std::vector<std::pair<ObjectId, ObjectId>> merged;
+  std::vector<ObjectId> removed_objects;           ///< their summaries (and observations) go
+  std::vector<StoredObjectSummary> object_summaries;  ///< insert or replace
+  std::map<KeyframeId, Eigen::Isometry3d> poses;   ///< new poses of existing keyframes
+  /// Map metadata written with the change (absent: unchanged).
+  std::optional<std::uint64_t> map_version;
+  std::optional<ObjectId> next_object_id;
+};
+
+/// Everything the store holds, in id order: what a restart rebuilds the map from.
+struct StoredMap {
+  std::vector<StoredKeyframe> keyframes;      ///< ascending id
+  std::vector<StoredObservation> observations;  ///< ascending (object id, keyframe id, insertion)
+  std::vector<StoredObjectSummary> objects;   ///< ascending id
+  std::uint64_t map_version = 0;
+  ObjectId next_object_id = 1;
+};
+
+struct KeyframeStoreConfig {
+  /// JPEG quality of stored colour images (1..100).
+  int color_jpeg_quality = 90;
+  /// SQLite busy timeout, milliseconds (another process holding the file).
+  int busy_timeout_ms = 5000;
+  /// "FULL": a committed change survives power loss; "NORMAL": survives a killed process (WAL).
+  std::string synchronous = "NORMAL";
+
+  [[nodiscard]] bool IsValid(std::string* why) const;
+};
+
+/// SQLite file (WAL journal, schema version in PRAGMA user_version) holding keyframes,
+/// detections, observations (segments) and object summaries. Depth is stored as 16-bit PNG
+/// (lossless), the object mask as 8-bit PNG, colour as JPEG.
+/// Thread-safety: one writer; const methods may run concurrently with each other and with
+/// Commit (each call uses its own read connection or serializes on an internal mutex).
+class KeyframeStore {
+ public:
+  ~KeyframeStore();
+  KeyframeStore(const KeyframeStore&) = delete;
+  KeyframeStore& operator=(const KeyframeStore&) = delete;
+
+  /// Opens (creating when absent) the database at `path`. Returns nullptr and a reason naming
+  /// the file when it cannot be opened, is not an objmap database, is corrupt (integrity
+  /// check), or has a schema version this build does not know.
+  static std::unique_ptr<KeyframeStore> Open(const std::string& path,
+                                             const KeyframeStoreConfig& config, std::string* why);
+
+  /// Applies the change in one transaction. False (and nothing applied) with a reason otherwise,
+  /// e.g. a keyframe id that already exists or a pose for an unknown keyframe.
+  [[nodiscard]] bool Commit(const StoreChange& change, std::string* why);
+
+  /// Loads everything (restart, regeneration from disk).
+  [[nodiscard]] bool LoadAll(StoredMap* map, std::string* why) const;
+  /// Loads one keyframe; false with "unknown keyframe id N" when absent.
+  [[nodiscard]] bool LoadKeyframe(KeyframeId id, StoredKeyframe* keyframe, std::string* why) const;
+
+  [[nodiscard]] std::size_t NumKeyframes() const;
+  /// Bytes of the database file plus its WAL.
+  [[nodiscard]] std::uint64_t FileBytes() const;
+  /// Total stored bytes per table column group for one keyframe: depth, mask, colour,
+  /// observations (benchmarks: bytes stored per keyframe).
+  struct KeyframeBytes {
+    std::uint64_t depth = 0, mask = 0, color = 0, observations = 0, total = 0;
+  };
+  [[nodiscard]] KeyframeBytes BytesOf(KeyframeId id) const;
+
+  [[nodiscard]] const std::string& path() const;
+  static constexpr int kSchemaVersion = 1;
+
+ private:
+  KeyframeStore();
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace objmap
