@@ -5,6 +5,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <mutex>
+#include <set>
+#include <shared_mutex>
 #include <sstream>
 
 #include "mapper/keyframe_segments.h"
@@ -18,16 +21,6 @@ using Clock = std::chrono::steady_clock;
 double MillisecondsSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
-
-// What regeneration needs of a keyframe: its pose, its depth image (millimetres, as sensors
-// deliver it: 2 bytes a pixel) and which pixels belong to objects. Clouds are re-made from it,
-// so a regenerated map is the map that full-resolution integration would have built.
-struct KeyframeRecord {
-  Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
-  CameraIntrinsics intrinsics;
-  std::vector<std::uint16_t> depth_mm;
-  std::vector<bool> is_object;
-};
 
 std::vector<Eigen::Vector3f> ToWorld(const std::vector<Eigen::Vector3f>& points_C,
                                      const Eigen::Isometry3d& T_W_C) {
@@ -50,7 +43,7 @@ ScanW ToScan(const KeyframeRecord& record) {
   scan.origin_W = T_W_C.translation();
   for (std::size_t i = 0; i < cloud_C.size(); ++i) {
     if (!cloud_C.IsValid(static_cast<int>(i))) continue;
-    (record.is_object[i] ? scan.object_points_W : scan.structure_points_W)
+    (record.object_mask[i] ? scan.object_points_W : scan.structure_points_W)
         .push_back(T_W_C * cloud_C.points_C[i]);
   }
   return scan;
@@ -67,9 +60,9 @@ KeyframeRecord MakeRecord(const RgbdFrame& frame,
     const bool valid = std::isfinite(depth_m) && depth_m > 0.f && depth_m < 65.f;
     record.depth_mm[i] = valid ? static_cast<std::uint16_t>(std::lround(depth_m * 1000.f)) : 0;
   }
-  record.is_object.assign(record.depth_mm.size(), false);
+  record.object_mask.assign(record.depth_mm.size(), 0);
   for (const SegmentedDetection& entry : segmented) {
-    for (int i : entry.pixels) record.is_object[i] = true;
+    for (int i : entry.pixels) record.object_mask[i] = 1;
   }
   return record;
 }
@@ -114,20 +107,23 @@ struct Mapper::Impl {
         segmenter(c.segmenter),
         associator(c.association),
         objects(c.objects),
-        occupancy(c.occupancy) {}
+        occupancy(std::make_unique<OccupancyMap>(c.occupancy)) {}
 
   MapperConfig config;
   Segmenter segmenter;
   Associator associator;
   ObjectMap objects;
-  OccupancyMap occupancy;
+  // Swapped whole after a regeneration; guarded by occupancy_mutex against ReadOccupancy.
+  std::unique_ptr<OccupancyMap> occupancy;
+  mutable std::shared_mutex occupancy_mutex;
   std::map<KeyframeId, KeyframeRecord> keyframes;
   KeyframeId next_keyframe_id = 1;
 
   void Associate(std::vector<SegmentedDetection>* segmented, const Eigen::Isometry3d& T_W_C,
                  KeyframeResult* result);
   void MergeDuplicates(KeyframeResult* result);
-  void Regenerate();
+  KeyframePoseLookup PoseLookup() const;
+  void RebuildOccupancy();
 };
 
 void Mapper::Impl::Associate(std::vector<SegmentedDetection>* segmented,
@@ -162,14 +158,20 @@ void Mapper::Impl::MergeDuplicates(KeyframeResult* result) {
   if (!result->merged.empty()) associator.ForgetMissing(objects);
 }
 
-void Mapper::Impl::Regenerate() {
-  objects.Rebuild([this](KeyframeId id) -> std::optional<Eigen::Isometry3d> {
+KeyframePoseLookup Mapper::Impl::PoseLookup() const {
+  return [this](KeyframeId id) -> std::optional<Eigen::Isometry3d> {
     auto it = keyframes.find(id);
     if (it == keyframes.end()) return std::nullopt;
     return it->second.T_W_C;
-  });
-  occupancy.Clear();
-  for (const auto& [id, record] : keyframes) occupancy.Integrate(ToScan(record));
+  };
+}
+
+// Built off to the side so readers keep the previous map until the swap.
+void Mapper::Impl::RebuildOccupancy() {
+  auto rebuilt = std::make_unique<OccupancyMap>(config.occupancy);
+  for (const auto& [id, record] : keyframes) rebuilt->Integrate(ToScan(record));
+  std::unique_lock<std::shared_mutex> lock(occupancy_mutex);
+  occupancy.swap(rebuilt);
 }
 
 Mapper::Mapper(const MapperConfig& config) : impl_(std::make_unique<Impl>(config)) {
@@ -200,13 +202,18 @@ bool Mapper::AddKeyframe(const RgbdFrame& frame, const std::vector<Detection>& d
   result->timings.association_ms = MillisecondsSince(start);
 
   start = Clock::now();
-  impl_->occupancy.Integrate(ToScan(record));
+  const ScanW scan = ToScan(record);
+  {
+    std::unique_lock<std::shared_mutex> lock(impl_->occupancy_mutex);
+    impl_->occupancy->Integrate(scan);
+  }
   impl_->keyframes.emplace(result->keyframe_id, std::move(record));
   result->timings.occupancy_ms = MillisecondsSince(start);
   return true;
 }
 
-bool Mapper::UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses, std::string* why) {
+bool Mapper::UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses, std::string* why,
+                         int* moved_count) {
   for (const auto& [id, T_W_C] : poses) {
     if (impl_->keyframes.count(id) == 0) {
       *why = "unknown keyframe id " + std::to_string(id);
@@ -218,9 +225,39 @@ bool Mapper::UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses, s
       return false;
     }
   }
-  for (const auto& [id, T_W_C] : poses) impl_->keyframes[id].T_W_C = T_W_C;
-  impl_->Regenerate();
+  std::set<KeyframeId> moved;
+  for (const auto& [id, T_W_C] : poses) {
+    KeyframeRecord& record = impl_->keyframes[id];
+    if (record.T_W_C.matrix() == T_W_C.matrix()) continue;
+    record.T_W_C = T_W_C;
+    moved.insert(id);
+  }
+  if (moved_count != nullptr) *moved_count = static_cast<int>(moved.size());
+  if (moved.empty()) return true;
+  impl_->objects.RebuildObserving(moved, impl_->PoseLookup());
+  impl_->RebuildOccupancy();
   return true;
+}
+
+void Mapper::Restore(std::map<KeyframeId, KeyframeRecord> keyframes,
+                     std::map<ObjectId, std::vector<ObjectObservation>> observations,
+                     ObjectId next_object_id) {
+  impl_->keyframes = std::move(keyframes);
+  impl_->next_keyframe_id =
+      impl_->keyframes.empty() ? 1 : impl_->keyframes.rbegin()->first + 1;
+  impl_->objects.Restore(std::move(observations), next_object_id, impl_->PoseLookup());
+  impl_->associator = Associator(impl_->config.association);  // caches of the old objects
+  impl_->RebuildOccupancy();
+}
+
+const KeyframeRecord* Mapper::FindKeyframe(KeyframeId id) const {
+  auto it = impl_->keyframes.find(id);
+  return it == impl_->keyframes.end() ? nullptr : &it->second;
+}
+
+void Mapper::ReadOccupancy(const std::function<void(const OccupancyMap&)>& read) const {
+  std::shared_lock<std::shared_mutex> lock(impl_->occupancy_mutex);
+  read(*impl_->occupancy);
 }
 
 int Mapper::KeyframesSeeing(const MapObject& object) const {
@@ -280,7 +317,7 @@ std::vector<InventoryEntry> Mapper::Inventory() const {
 }
 
 const ObjectMap& Mapper::objects() const { return impl_->objects; }
-const OccupancyMap& Mapper::occupancy() const { return impl_->occupancy; }
+const OccupancyMap& Mapper::occupancy() const { return *impl_->occupancy; }
 std::size_t Mapper::num_keyframes() const { return impl_->keyframes.size(); }
 const MapperConfig& Mapper::config() const { return impl_->config; }
 

@@ -1,6 +1,8 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -86,8 +88,21 @@ struct InventoryEntry {
   std::vector<ObjectId> objects;
 };
 
+/// What the mapper keeps of a keyframe to regenerate the map after its pose changes: the depth
+/// image (millimetres, as sensors deliver it: 2 bytes a pixel) and which pixels belong to objects.
+/// Clouds are re-made from it, so a regenerated map is the map full-resolution integration builds.
+struct KeyframeRecord {
+  Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
+  CameraIntrinsics intrinsics;
+  std::vector<std::uint16_t> depth_mm;     ///< row-major, 0: no depth
+  std::vector<std::uint8_t> object_mask;   ///< row-major, 1: the pixel belongs to an object
+};
+
 /// The facade of the core: keyframes in, objects and occupancy out (paper Fig. 3).
-/// Thread-safety: none; one thread at a time (a server wraps it with its own locking).
+/// Thread-safety: the writers (AddKeyframe, UpdatePoses, Restore) and every other method must be
+/// called from one thread at a time, except ReadOccupancy, which may run on any thread at any
+/// time: OctoMap updates take an exclusive lock for one keyframe's integration, and regeneration
+/// builds the new OctoMap off to the side and swaps it in, so readers never wait for it.
 class Mapper {
  public:
   /// `config` must satisfy IsValid(); an invalid config is a programming error.
@@ -102,8 +117,22 @@ class Mapper {
 
   /// Replaces keyframe poses (a pose-graph update) and regenerates the object models and the
   /// occupancy map from the stored keyframe clouds. Unknown ids or bad poses: false, map unchanged.
+  /// Only objects seen from moved keyframes are rebuilt; the OctoMap is rebuilt (aside, then
+  /// swapped) when any keyframe moved. `moved` (may be null) receives how many keyframes moved.
   [[nodiscard]] bool UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses,
-                                 std::string* why);
+                                 std::string* why, int* moved = nullptr);
+
+  /// Replaces the whole state by stored keyframes and object observations (a restart): object
+  /// models and the OctoMap are rebuilt from them; keyframe ids continue after the largest one.
+  void Restore(std::map<KeyframeId, KeyframeRecord> keyframes,
+               std::map<ObjectId, std::vector<ObjectObservation>> observations,
+               ObjectId next_object_id);
+
+  /// The stored record of a keyframe, or nullptr.
+  [[nodiscard]] const KeyframeRecord* FindKeyframe(KeyframeId id) const;
+
+  /// Runs `read` on the OctoMap under a shared lock (safe from any thread, see the class note).
+  void ReadOccupancy(const std::function<void(const OccupancyMap&)>& read) const;
 
   /// Keyframes whose view holds the object's centroid, unoccluded (InventoryConfig).
   [[nodiscard]] int KeyframesSeeing(const MapObject& object) const;
@@ -114,6 +143,7 @@ class Mapper {
   [[nodiscard]] std::vector<InventoryEntry> Inventory() const;
 
   [[nodiscard]] const ObjectMap& objects() const;
+  /// The OctoMap; on the writer's thread only (others use ReadOccupancy).
   [[nodiscard]] const OccupancyMap& occupancy() const;
   [[nodiscard]] std::size_t num_keyframes() const;
   [[nodiscard]] const MapperConfig& config() const;

@@ -117,14 +117,51 @@ bool ObjectMap::Merge(ObjectId kept, ObjectId absorbed) {
 
 bool ObjectMap::Remove(ObjectId id) { return objects_.erase(id) > 0; }
 
+void ObjectMap::RebuildObject(MapObject* object, const KeyframePoseLookup& pose_of) {
+  object->model_W.Clear();
+  for (const ObjectObservation& observation : object->observations) {
+    const std::optional<Eigen::Isometry3d> T_W_C = pose_of(observation.keyframe_id);
+    if (T_W_C) object->model_W.Insert(Transform(observation.segment_C, *T_W_C));
+  }
+  UpdateBounds(object);
+}
+
 void ObjectMap::Rebuild(const KeyframePoseLookup& pose_of) {
+  for (auto& [id, object] : objects_) RebuildObject(&object, pose_of);
+}
+
+std::size_t ObjectMap::RebuildObserving(const std::set<KeyframeId>& moved,
+                                        const KeyframePoseLookup& pose_of) {
+  std::size_t rebuilt = 0;
   for (auto& [id, object] : objects_) {
-    object.model_W.Clear();
+    const bool touched =
+        std::any_of(object.observations.begin(), object.observations.end(),
+                    [&](const ObjectObservation& o) { return moved.count(o.keyframe_id) > 0; });
+    if (!touched) continue;
+    RebuildObject(&object, pose_of);
+    ++rebuilt;
+  }
+  return rebuilt;
+}
+
+void ObjectMap::Restore(std::map<ObjectId, std::vector<ObjectObservation>> observations,
+                        ObjectId next_id, const KeyframePoseLookup& pose_of) {
+  objects_.clear();
+  next_id_ = next_id;
+  for (auto& [id, list] : observations) {
+    MapObject& object = objects_[id];
+    object.id = id;
+    object.model_W = VoxelModel(config_.model_voxel_size_m);
+    object.observations = std::move(list);
     for (const ObjectObservation& observation : object.observations) {
-      const std::optional<Eigen::Isometry3d> T_W_C = pose_of(observation.keyframe_id);
-      if (T_W_C) object.model_W.Insert(Transform(observation.segment_C, *T_W_C));
+      for (const auto& [class_id, score] : observation.class_scores) {
+        if (class_id >= 0 && class_id < kNumCocoClasses) {
+          object.accumulated_scores[class_id] += score;
+        }
+      }
     }
-    UpdateBounds(&object);
+    RebuildObject(&object, pose_of);
+    next_id_ = std::max(next_id_, id + 1);
   }
 }
 

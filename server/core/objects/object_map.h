@@ -5,6 +5,7 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -78,6 +79,16 @@ class ObjectMap {
   /// Rebuilds every model from its stored segments with the poses `pose_of` returns now.
   /// Observations whose keyframe has no pose are kept but not drawn.
   void Rebuild(const KeyframePoseLookup& pose_of);
+  /// Rebuilds only the objects observed from one of `moved` keyframes (the others keep their
+  /// models: their segments are drawn with unchanged poses). Returns how many were rebuilt.
+  std::size_t RebuildObserving(const std::set<KeyframeId>& moved,
+                               const KeyframePoseLookup& pose_of);
+
+  /// Replaces the whole map by objects with the given ids and observations (a restart from
+  /// stored state); ids handed out afterwards start at `next_id` (at least past the largest).
+  void Restore(std::map<ObjectId, std::vector<ObjectObservation>> observations, ObjectId next_id,
+               const KeyframePoseLookup& pose_of);
+  [[nodiscard]] ObjectId next_id() const { return next_id_; }
 
   [[nodiscard]] const MapObject* Find(ObjectId id) const;
   [[nodiscard]] const std::map<ObjectId, MapObject>& objects() const { return objects_; }
@@ -88,6 +99,7 @@ class ObjectMap {
   void AddToModel(MapObject* object, const ObjectObservation& observation,
                   const Eigen::Isometry3d& T_W_C);
   static void UpdateBounds(MapObject* object);
+  void RebuildObject(MapObject* object, const KeyframePoseLookup& pose_of);
 
   ObjectMapConfig config_;
   std::map<ObjectId, MapObject> objects_;
