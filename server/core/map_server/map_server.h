@@ -81,6 +81,9 @@ struct MapSnapshot {
   std::size_t num_keyframes = 0;
   std::map<ObjectId, std::shared_ptr<const ObjectView>> objects;
   std::vector<InventoryEntry> inventory;  ///< confirmed objects per class, most frequent first
+  /// Per COCO class, the last version at which an object of it was added, changed or removed
+  /// (or changed label or inventory status); what Inventory(since) filters on.
+  std::vector<std::uint64_t> class_changed_version;
 };
 
 /// Object query; every set field must hold.
@@ -205,7 +208,8 @@ class MapServer {
 
   /// Changes with version > `since_version`, oldest first. Waits up to `timeout` when there are
   /// none yet; returns empty on timeout or shutdown. When `since_version` is older than the
-  /// remembered history, the first change returned summarizes the forgotten ones.
+  /// remembered history (config.change_history, or a restart), one change at the current version
+  /// lists every current object as updated instead.
   [[nodiscard]] std::vector<MapChange> ChangesSince(std::uint64_t since_version,
                                                     std::chrono::milliseconds timeout) const;
 

@@ -1,0 +1,352 @@
+#include "map_server/map_server.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "map_server/map_server_impl.h"
+#include "map_server/store_records.h"
+
+namespace objmap {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double MillisecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// Observations this keyframe added, with the object that holds each now (after merges).
+std::vector<StoredObservation> NewObservations(const ObjectMap& objects,
+                                               const std::set<ObjectId>& touched,
+                                               KeyframeId keyframe_id) {
+  std::vector<StoredObservation> rows;
+  for (ObjectId id : touched) {
+    const MapObject* object = objects.Find(id);
+    if (object == nullptr) continue;
+    for (const ObjectObservation& observation : object->observations) {
+      if (observation.keyframe_id == keyframe_id) rows.push_back({id, observation});
+    }
+  }
+  return rows;
+}
+
+StoredObjectSummary Summarize(const MapObject& object) {
+  StoredObjectSummary summary;
+  summary.id = object.id;
+  summary.class_id = object.Label();
+  summary.confidence = object.Confidence();
+  summary.centroid_W = object.centroid_W;
+  summary.observations = static_cast<int>(object.observations.size());
+  return summary;
+}
+
+}  // namespace
+
+bool MapServerConfig::IsValid(std::string* why) const {
+  if (!mapper.IsValid(why) || !store.IsValid(why)) return false;
+  if (max_queue < 1 || change_history < 1 || max_listed_voxels < 1) {
+    *why = "MapServerConfig: max_queue, change_history and max_listed_voxels must be >= 1";
+    return false;
+  }
+  if (!(max_query_volume_m3 > 0.0)) {
+    *why = "MapServerConfig.max_query_volume_m3 must be positive";
+    return false;
+  }
+  return true;
+}
+
+MapServer::MapServer() : impl_(std::make_unique<Impl>()) {}
+
+MapServer::~MapServer() {
+  Shutdown();
+  if (impl_->worker.joinable()) impl_->worker.join();
+}
+
+std::unique_ptr<MapServer> MapServer::Open(const MapServerConfig& config,
+                                           const std::string& db_path,
+                                           std::unique_ptr<Detector> detector, std::string* why) {
+  if (!config.IsValid(why)) return nullptr;
+  std::unique_ptr<MapServer> server(new MapServer());
+  Impl& impl = *server->impl_;
+  impl.config = config;
+  impl.store = KeyframeStore::Open(db_path, config.store, why);
+  if (!impl.store) return nullptr;
+  StoredMap stored;
+  if (!impl.store->LoadAll(&stored, why)) {
+    *why = "cannot load " + db_path + ": " + *why;
+    return nullptr;
+  }
+  const std::uint64_t version = stored.map_version;
+  impl.mapper = std::make_unique<Mapper>(config.mapper);
+  RestoreMapper(std::move(stored), impl.mapper.get(), &impl.known_keyframes);
+  impl.planned_version = version;
+  impl.history_start = version;
+  impl.snapshot = impl.snapshot_builder.Build(*impl.mapper, version, nullptr);
+  impl.detector = std::move(detector);
+  impl.worker = std::thread([&impl] { impl.Run(); });
+  return server;
+}
+
+std::shared_ptr<const MapSnapshot> MapServer::Impl::Current() const {
+  std::lock_guard<std::mutex> lock(snapshot_mutex);
+  return snapshot;
+}
+
+std::shared_ptr<const MapSnapshot> MapServer::Snapshot() const { return impl_->Current(); }
+
+ServiceStatus MapServer::Impl::Enqueue(std::shared_ptr<MapJob> job, bool bounded) {
+  std::lock_guard<std::mutex> lock(queue_mutex);
+  if (stopping) return {StatusCode::kUnavailable, "the server is shutting down"};
+  if (bounded && static_cast<int>(queue.size()) >= config.max_queue) {
+    return {StatusCode::kResourceExhausted,
+            "ingest queue full (" + std::to_string(queue.size()) + " waiting); retry later"};
+  }
+  job->version = ++planned_version;
+  queue.push_back(std::move(job));
+  queue_cv.notify_one();
+  return ServiceStatus::Ok();
+}
+
+void MapServer::Impl::Run() {
+  for (;;) {
+    std::shared_ptr<MapJob> job;
+    {
+      std::unique_lock<std::mutex> lock(queue_mutex);
+      queue_cv.wait(lock, [this] { return stopping || !queue.empty(); });
+      if (queue.empty()) return;  // stopping, and everything queued is done
+      job = queue.front();
+    }
+    MapJob::Result result =
+        job->kind == MapJob::Kind::kKeyframe ? ApplyKeyframe(job.get()) : ApplyPoses(job.get());
+    {
+      // Popped only now, so Status() counts the job being applied as queued.
+      std::lock_guard<std::mutex> lock(queue_mutex);
+      queue.pop_front();
+    }
+    job->done.set_value(std::move(result));
+  }
+}
+
+void MapServer::Impl::Publish(std::shared_ptr<const MapSnapshot> next, MapChange change) {
+  {
+    std::lock_guard<std::mutex> lock(snapshot_mutex);
+    snapshot = std::move(next);
+  }
+  std::lock_guard<std::mutex> lock(changes_mutex);
+  changes.push_back(std::move(change));
+  while (static_cast<int>(changes.size()) > config.change_history) {
+    history_start = changes.front().version;
+    changes.pop_front();
+  }
+  changes_cv.notify_all();
+}
+
+MapJob::Result MapServer::Impl::ApplyKeyframe(MapJob* job) {
+  MapJob::Result out;
+  KeyframeResult result;
+  std::string why;
+  if (!mapper->AddKeyframe(job->frame, job->detections, &result, &why)) {
+    out.status = ServiceStatus::Invalid(why);
+    return out;
+  }
+  std::set<ObjectId> touched(result.created.begin(), result.created.end());
+  touched.insert(result.updated.begin(), result.updated.end());
+  std::vector<ObjectId> removed;
+  for (const auto& [kept, absorbed] : result.merged) {
+    touched.erase(absorbed);
+    touched.insert(kept);
+    removed.push_back(absorbed);
+  }
+  StoreChange change;
+  change.keyframe = MakeStoredKeyframe(job->frame, job->detections, result.keyframe_id,
+                                       *mapper->FindKeyframe(result.keyframe_id));
+  change.observations = NewObservations(mapper->objects(), touched, result.keyframe_id);
+  change.merged = result.merged;
+  for (ObjectId id : touched) {
+    if (const MapObject* object = mapper->objects().Find(id)) {
+      change.object_summaries.push_back(Summarize(*object));
+    }
+  }
+  change.map_version = job->version;
+  change.next_object_id = mapper->objects().next_id();
+  if (!store->Commit(change, &why)) {
+    out.status = {StatusCode::kInternal, "keyframe " + std::to_string(result.keyframe_id) +
+                                             " was mapped but not stored: " + why};
+    return out;
+  }
+  {
+    std::lock_guard<std::mutex> lock(known_mutex);
+    known_keyframes.insert(result.keyframe_id);
+  }
+  SnapshotBuilder::Diff diff;
+  auto next = snapshot_builder.Build(*mapper, job->version, &diff);
+  MapChange map_change{job->version, MapChange::Kind::kKeyframeAdded, result.keyframe_id,
+                       diff.added, diff.updated, diff.removed};
+  Publish(std::move(next), std::move(map_change));
+
+  out.keyframe.keyframe_id = result.keyframe_id;
+  out.keyframe.map_version = job->version;
+  out.keyframe.detections_used = result.detections_used;
+  out.keyframe.created = result.created;
+  out.keyframe.updated = result.updated;
+  out.keyframe.removed = removed;
+  return out;
+}
+
+MapJob::Result MapServer::Impl::ApplyPoses(MapJob* job) {
+  MapJob::Result out;
+  const auto start = Clock::now();
+  regenerating = true;
+  std::string why;
+  int moved = 0;
+  const bool ok = mapper->UpdatePoses(job->poses, &why, &moved);
+  regenerating = false;
+  if (!ok) {  // validated before queueing; only a bug gets here
+    out.status = {StatusCode::kInternal, "regeneration failed: " + why};
+    return out;
+  }
+  const double elapsed_ms = MillisecondsSince(start);
+  SnapshotBuilder::Diff diff;
+  auto next = snapshot_builder.Build(*mapper, job->version, &diff);
+  StoreChange change;  // object summaries follow the moved models
+  for (ObjectId id : diff.updated) {
+    if (const MapObject* object = mapper->objects().Find(id)) {
+      change.object_summaries.push_back(Summarize(*object));
+    }
+  }
+  change.map_version = job->version;
+  if (!store->Commit(change, &why)) {
+    out.status = {StatusCode::kInternal, "regenerated map not recorded: " + why};
+  }
+  last_regeneration_ms = elapsed_ms;
+  last_regeneration_version = job->version;
+  Publish(std::move(next), MapChange{job->version, MapChange::Kind::kPosesUpdated, 0, diff.added,
+                                     diff.updated, diff.removed});
+  out.poses.map_version = job->version;
+  out.poses.regenerated = true;
+  out.poses.keyframes_moved = moved;
+  out.poses.regeneration_ms = elapsed_ms;
+  return out;
+}
+
+ServiceStatus MapServer::AddKeyframe(RgbdFrame frame,
+                                     std::optional<std::vector<Detection>> detections,
+                                     AddKeyframeOutcome* outcome) {
+  std::string why;
+  if (!ValidateFrame(frame, &why)) return ServiceStatus::Invalid(why);
+  if (impl_->shutting_down) return {StatusCode::kUnavailable, "the server is shutting down"};
+  auto job = std::make_shared<MapJob>();
+  if (detections) {
+    job->detections = std::move(*detections);
+  } else if (impl_->detector) {
+    std::lock_guard<std::mutex> lock(impl_->detector_mutex);
+    if (!impl_->detector->Detect(frame, &job->detections, &why)) {
+      return ServiceStatus::Invalid("detector: " + why);
+    }
+  }
+  job->frame = std::move(frame);
+  std::future<MapJob::Result> done = job->done.get_future();
+  ServiceStatus queued = impl_->Enqueue(job, /*bounded=*/true);
+  if (!queued.ok()) return queued;
+  MapJob::Result result = done.get();
+  if (result.status.ok()) *outcome = std::move(result.keyframe);
+  return result.status;
+}
+
+ServiceStatus MapServer::UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses,
+                                     bool wait, PoseUpdateOutcome* outcome) {
+  if (poses.empty()) return ServiceStatus::Invalid("poses: empty");
+  {
+    std::lock_guard<std::mutex> lock(impl_->known_mutex);
+    for (const auto& [id, T_W_C] : poses) {
+      if (impl_->known_keyframes.count(id) == 0) {
+        return ServiceStatus::NotFound("poses: unknown keyframe id " + std::to_string(id));
+      }
+    }
+  }
+  for (const auto& [id, T_W_C] : poses) {
+    std::string why;
+    if (!IsValidRigidTransform(T_W_C.matrix(), &why)) {
+      return ServiceStatus::Invalid("poses[keyframe " + std::to_string(id) + "]: " + why);
+    }
+  }
+  // Durable before acknowledging: a restart regenerates with these poses.
+  StoreChange change;
+  change.poses = poses;
+  std::string why;
+  if (!impl_->store->Commit(change, &why)) return {StatusCode::kInternal, "poses not stored: " + why};
+  auto job = std::make_shared<MapJob>();
+  job->kind = MapJob::Kind::kPoses;
+  job->poses = poses;
+  std::future<MapJob::Result> done = job->done.get_future();
+  ServiceStatus queued = impl_->Enqueue(job, /*bounded=*/false);
+  if (!queued.ok()) return queued;
+  *outcome = PoseUpdateOutcome{};
+  outcome->map_version = job->version;
+  if (!wait) return ServiceStatus::Ok();
+  MapJob::Result result = done.get();
+  if (result.status.ok()) *outcome = result.poses;
+  return result.status;
+}
+
+ServerStatus MapServer::Status() const {
+  const auto snapshot = impl_->Current();
+  ServerStatus status;
+  status.map_version = snapshot->version;
+  status.keyframes = snapshot->num_keyframes;
+  status.objects = snapshot->objects.size();
+  for (const InventoryEntry& entry : snapshot->inventory) status.confirmed_objects += entry.count;
+  {
+    std::lock_guard<std::mutex> lock(impl_->queue_mutex);
+    status.queue_length = static_cast<int>(impl_->queue.size());
+  }
+  status.regenerating = impl_->regenerating;
+  status.last_regeneration_ms = impl_->last_regeneration_ms;
+  status.last_regeneration_version = impl_->last_regeneration_version;
+  status.database = impl_->store->path();
+  status.database_bytes = impl_->store->FileBytes();
+  status.uptime_s = std::chrono::duration<double>(Clock::now() - impl_->started).count();
+  return status;
+}
+
+std::vector<MapChange> MapServer::ChangesSince(std::uint64_t since_version,
+                                               std::chrono::milliseconds timeout) const {
+  std::unique_lock<std::mutex> lock(impl_->changes_mutex);
+  auto newer = [&] {
+    return impl_->shutting_down || (!impl_->changes.empty() &&
+                                    impl_->changes.back().version > since_version);
+  };
+  if (!impl_->changes_cv.wait_for(lock, timeout, newer) || impl_->shutting_down) return {};
+  const auto& changes = impl_->changes;
+  if (since_version < impl_->history_start) {
+    // Older than the history: summarize as every current object updated at the newest version.
+    const auto snapshot = impl_->Current();
+    MapChange summary;
+    summary.version = snapshot->version;
+    summary.kind = MapChange::Kind::kPosesUpdated;
+    for (const auto& [id, view] : snapshot->objects) summary.updated.push_back(id);
+    return {summary};
+  }
+  std::vector<MapChange> result;
+  for (const MapChange& change : changes) {
+    if (change.version > since_version) result.push_back(change);
+  }
+  return result;
+}
+
+void MapServer::Shutdown() {
+  impl_->shutting_down = true;
+  {
+    std::lock_guard<std::mutex> lock(impl_->queue_mutex);
+    impl_->stopping = true;
+  }
+  impl_->queue_cv.notify_all();
+  {
+    std::lock_guard<std::mutex> lock(impl_->changes_mutex);
+    impl_->changes_cv.notify_all();
+  }
+}
+
+bool MapServer::shutting_down() const { return impl_->shutting_down; }
+
+}  // namespace objmap

@@ -1,0 +1,81 @@
+#pragma once
+// Private to map_server: the state shared by the writer (map_server.cc) and the queries
+// (queries.cc).
+
+#include <array>
+#include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <future>
+#include <mutex>
+#include <set>
+#include <thread>
+
+#include "map_server/map_server.h"
+#include "map_server/snapshot_builder.h"
+
+namespace objmap {
+
+/// A queued write: a keyframe or a pose update, applied by the mapping thread in order.
+struct MapJob {
+  enum class Kind { kKeyframe, kPoses };
+  Kind kind = Kind::kKeyframe;
+  std::uint64_t version = 0;  ///< the map version this job produces when it succeeds
+  RgbdFrame frame;
+  std::vector<Detection> detections;
+  std::map<KeyframeId, Eigen::Isometry3d> poses;
+
+  struct Result {
+    ServiceStatus status;
+    AddKeyframeOutcome keyframe;
+    PoseUpdateOutcome poses;
+  };
+  std::promise<Result> done;
+};
+
+struct MapServer::Impl {
+  MapServerConfig config;
+  std::unique_ptr<KeyframeStore> store;
+  std::unique_ptr<Mapper> mapper;  // touched by the mapping thread only (and ReadOccupancy)
+  SnapshotBuilder snapshot_builder;  // mapping thread only
+  std::chrono::steady_clock::time_point started = std::chrono::steady_clock::now();
+
+  std::unique_ptr<Detector> detector;
+  std::mutex detector_mutex;  // detectors are not thread-safe
+
+  // Queue of writes.
+  mutable std::mutex queue_mutex;
+  std::condition_variable queue_cv;
+  std::deque<std::shared_ptr<MapJob>> queue;
+  std::uint64_t planned_version = 0;  // last version handed to a job (queue_mutex)
+  bool stopping = false;              // queue_mutex
+  std::atomic<bool> shutting_down{false};
+  std::thread worker;
+
+  // Keyframe ids committed to the store: UpdatePoses validates against them on any thread.
+  mutable std::mutex known_mutex;
+  std::set<KeyframeId> known_keyframes;
+
+  // The published snapshot.
+  mutable std::mutex snapshot_mutex;
+  std::shared_ptr<const MapSnapshot> snapshot;
+
+  // Recent changes for ChangesSince.
+  mutable std::mutex changes_mutex;
+  mutable std::condition_variable changes_cv;
+  std::deque<MapChange> changes;
+  std::uint64_t history_start = 0;  // changes after this version are all remembered
+
+  std::atomic<bool> regenerating{false};
+  std::atomic<double> last_regeneration_ms{0.0};
+  std::atomic<std::uint64_t> last_regeneration_version{0};
+
+  void Run();
+  MapJob::Result ApplyKeyframe(MapJob* job);
+  MapJob::Result ApplyPoses(MapJob* job);
+  void Publish(std::shared_ptr<const MapSnapshot> next, MapChange change);
+  ServiceStatus Enqueue(std::shared_ptr<MapJob> job, bool bounded);
+  [[nodiscard]] std::shared_ptr<const MapSnapshot> Current() const;
+};
+
+}  // namespace objmap

@@ -1,0 +1,185 @@
+// The read side of MapServer: every query reads one snapshot (objects) or the OctoMap under a
+// shared lock, so none waits for a regeneration.
+#include <algorithm>
+#include <cmath>
+
+#include "map_server/map_server_impl.h"
+
+namespace objmap {
+namespace {
+
+bool InBox(const Eigen::Vector3f& p, const Eigen::Vector3d& min_W, const Eigen::Vector3d& max_W) {
+  const Eigen::Vector3d q = p.cast<double>();
+  return (q.array() >= min_W.array()).all() && (q.array() <= max_W.array()).all();
+}
+
+bool IsFiniteVector(const Eigen::Vector3d& v) { return v.allFinite(); }
+
+}  // namespace
+
+bool ValidateBox(const Eigen::Vector3d& min_W, const Eigen::Vector3d& max_W,
+                 const std::string& field, std::string* why) {
+  if (!IsFiniteVector(min_W) || !IsFiniteVector(max_W)) {
+    *why = field + ": coordinates must be finite";
+    return false;
+  }
+  static const char* kAxes[] = {"x", "y", "z"};
+  for (int axis = 0; axis < 3; ++axis) {
+    if (min_W[axis] > max_W[axis]) {
+      *why = field + ".min." + kAxes[axis] + " (" + std::to_string(min_W[axis]) + ") > " + field +
+             ".max." + kAxes[axis] + " (" + std::to_string(max_W[axis]) + ")";
+      return false;
+    }
+  }
+  return true;
+}
+
+ServiceStatus MapServer::QueryObjects(const ObjectFilter& filter,
+                                      std::vector<std::shared_ptr<const ObjectView>>* objects,
+                                      std::uint64_t* version) const {
+  std::string why;
+  if (filter.class_id && (*filter.class_id < 0 || *filter.class_id >= kNumCocoClasses)) {
+    return ServiceStatus::Invalid("class_id " + std::to_string(*filter.class_id) +
+                                  " is not a COCO class (0.." +
+                                  std::to_string(kNumCocoClasses - 1) + ")");
+  }
+  if (filter.region && !ValidateBox(filter.region->first, filter.region->second, "region", &why)) {
+    return ServiceStatus::Invalid(why);
+  }
+  if (filter.nearest_to && !IsFiniteVector(*filter.nearest_to)) {
+    return ServiceStatus::Invalid("nearest_to: coordinates must be finite");
+  }
+  if (!std::isfinite(filter.min_confidence)) {
+    return ServiceStatus::Invalid("min_confidence must be finite");
+  }
+  const auto snapshot = impl_->Current();
+  objects->clear();
+  for (const auto& [id, view] : snapshot->objects) {
+    if (!filter.include_unconfirmed && !view->confirmed) continue;
+    if (filter.class_id && view->class_id != *filter.class_id) continue;
+    if (view->confidence < filter.min_confidence) continue;
+    if (filter.region && !InBox(view->centroid_W, filter.region->first, filter.region->second)) {
+      continue;
+    }
+    objects->push_back(view);
+  }
+  if (filter.nearest_to) {
+    const Eigen::Vector3f point = filter.nearest_to->cast<float>();
+    std::stable_sort(objects->begin(), objects->end(), [&](const auto& a, const auto& b) {
+      return (a->centroid_W - point).squaredNorm() < (b->centroid_W - point).squaredNorm();
+    });
+  }
+  if (filter.max_results > 0 && objects->size() > filter.max_results) {
+    objects->resize(filter.max_results);
+  }
+  *version = snapshot->version;
+  return ServiceStatus::Ok();
+}
+
+ServiceStatus MapServer::GetObject(ObjectId id, std::shared_ptr<const ObjectView>* object) const {
+  const auto snapshot = impl_->Current();
+  auto it = snapshot->objects.find(id);
+  if (it == snapshot->objects.end()) {
+    return ServiceStatus::NotFound("unknown object id " + std::to_string(id));
+  }
+  *object = it->second;
+  return ServiceStatus::Ok();
+}
+
+ServiceStatus MapServer::Inventory(std::optional<std::uint64_t> since_version,
+                                   std::vector<InventoryEntry>* entries,
+                                   std::uint64_t* version) const {
+  const auto snapshot = impl_->Current();
+  *version = snapshot->version;
+  if (!since_version) {
+    *entries = snapshot->inventory;
+    return ServiceStatus::Ok();
+  }
+  if (*since_version > snapshot->version) {
+    return ServiceStatus::Invalid("since_version " + std::to_string(*since_version) +
+                                  " is newer than the map (version " +
+                                  std::to_string(snapshot->version) + ")");
+  }
+  entries->clear();
+  for (int class_id = 0; class_id < kNumCocoClasses; ++class_id) {
+    if (snapshot->class_changed_version[class_id] <= *since_version) continue;
+    auto it = std::find_if(snapshot->inventory.begin(), snapshot->inventory.end(),
+                           [&](const InventoryEntry& e) { return e.class_id == class_id; });
+    if (it != snapshot->inventory.end()) {
+      entries->push_back(*it);
+    } else {
+      InventoryEntry gone;  // changed, and no confirmed object of it is left
+      gone.class_id = class_id;
+      entries->push_back(gone);
+    }
+  }
+  return ServiceStatus::Ok();
+}
+
+ServiceStatus MapServer::QueryOccupancy(const Eigen::Vector3d& min_W, const Eigen::Vector3d& max_W,
+                                        double resolution_m, bool list_voxels,
+                                        std::size_t max_voxels, RegionOccupancy* region,
+                                        std::uint64_t* version) const {
+  std::string why;
+  if (!ValidateBox(min_W, max_W, "region", &why)) return ServiceStatus::Invalid(why);
+  if (!std::isfinite(resolution_m) || resolution_m < 0.0) {
+    return ServiceStatus::Invalid("resolution must be finite and >= 0");
+  }
+  const double volume = (max_W - min_W).prod();
+  if (volume > impl_->config.max_query_volume_m3) {
+    return ServiceStatus::Invalid("region volume " + std::to_string(volume) + " m^3 exceeds " +
+                                  std::to_string(impl_->config.max_query_volume_m3));
+  }
+  const std::size_t limit = std::min<std::size_t>(
+      max_voxels == 0 ? impl_->config.max_listed_voxels : max_voxels,
+      impl_->config.max_listed_voxels);
+  *version = impl_->Current()->version;
+  impl_->mapper->ReadOccupancy([&](const OccupancyMap& map) {
+    *region = map.QueryRegion(min_W, max_W, resolution_m, list_voxels ? limit : 0);
+  });
+  return ServiceStatus::Ok();
+}
+
+ServiceStatus MapServer::IsFree(const Eigen::Vector3d& min_W, const Eigen::Vector3d& max_W,
+                                bool unknown_is_free, bool* free, RegionOccupancy* counts,
+                                std::uint64_t* version) const {
+  ServiceStatus status = QueryOccupancy(min_W, max_W, 0.0, false, 0, counts, version);
+  if (!status.ok()) return status;
+  *free = counts->occupied == 0 && (unknown_is_free || counts->unknown == 0);
+  return status;
+}
+
+ServiceStatus MapServer::CastRay(const Eigen::Vector3d& origin_W,
+                                 const Eigen::Vector3d& direction_W, double max_range_m,
+                                 bool unknown_stops, RayHit* hit, std::uint64_t* version) const {
+  if (!IsFiniteVector(origin_W)) return ServiceStatus::Invalid("origin: coordinates must be finite");
+  if (!IsFiniteVector(direction_W) || direction_W.norm() < 1e-9) {
+    return ServiceStatus::Invalid("direction must be finite and non-zero");
+  }
+  if (!std::isfinite(max_range_m) || max_range_m <= 0.0 || max_range_m > 1000.0) {
+    return ServiceStatus::Invalid("max_range must be in (0, 1000] metres");
+  }
+  *version = impl_->Current()->version;
+  impl_->mapper->ReadOccupancy([&](const OccupancyMap& map) {
+    *hit = map.CastRay(origin_W, direction_W, max_range_m, unknown_stops);
+  });
+  return ServiceStatus::Ok();
+}
+
+ServiceStatus MapServer::OctomapBytes(
+    const std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>>& region, std::string* bytes,
+    std::size_t* leaf_count, std::uint64_t* version) const {
+  std::string why;
+  if (region && !ValidateBox(region->first, region->second, "region", &why)) {
+    return ServiceStatus::Invalid(why);
+  }
+  const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
+  *version = impl_->Current()->version;
+  impl_->mapper->ReadOccupancy([&](const OccupancyMap& map) {
+    *bytes = map.BinaryBytes(region.has_value(), region ? region->first : zero,
+                             region ? region->second : zero, leaf_count);
+  });
+  return ServiceStatus::Ok();
+}
+
+}  // namespace objmap

@@ -1,0 +1,96 @@
+#include "map_server/snapshot_builder.h"
+
+#include <algorithm>
+#include <set>
+
+namespace objmap {
+
+std::shared_ptr<const ObjectView> SnapshotBuilder::MakeView(
+    const MapObject& object, bool confirmed, std::uint64_t version,
+    const std::shared_ptr<const ObjectView>& previous) {
+  auto view = std::make_shared<ObjectView>();
+  view->id = object.id;
+  view->class_id = object.Label();
+  view->confidence = object.Confidence();
+  view->centroid_W = object.centroid_W;
+  view->min_W = object.min_W;
+  view->max_W = object.max_W;
+  view->observations = static_cast<int>(object.observations.size());
+  view->keyframes = object.Keyframes();
+  for (int c = 0; c < kNumCocoClasses; ++c) {
+    if (object.accumulated_scores[c] > 0.f) view->scores.emplace_back(c, object.accumulated_scores[c]);
+  }
+  std::sort(view->scores.begin(), view->scores.end(),
+            [](const auto& a, const auto& b) { return a.second > b.second; });
+  view->confirmed = confirmed;
+  view->changed_version = version;
+  // The model is the expensive part: shared with the previous view when the object's model did
+  // not change (only its inventory status did).
+  const bool same_model = previous && model_versions_[object.id] == object.version;
+  view->model_W = same_model ? previous->model_W
+                             : std::make_shared<const ColoredPoints>(object.model_W.Points());
+  return view;
+}
+
+void SnapshotBuilder::Touch(int class_id, std::uint64_t version) {
+  if (class_id >= 0 && class_id < kNumCocoClasses) class_changed_version_[class_id] = version;
+}
+
+std::shared_ptr<const MapSnapshot> SnapshotBuilder::Build(const Mapper& mapper,
+                                                          std::uint64_t version, Diff* diff) {
+  std::set<ObjectId> confirmed;
+  for (const MapObject* object : mapper.ConfirmedObjects()) confirmed.insert(object->id);
+
+  auto snapshot = std::make_shared<MapSnapshot>();
+  snapshot->version = version;
+  snapshot->num_keyframes = mapper.num_keyframes();
+  Diff local;
+  for (const auto& [id, object] : mapper.objects().objects()) {
+    const bool is_confirmed = confirmed.count(id) > 0;
+    auto previous_it = views_.find(id);
+    std::shared_ptr<const ObjectView> previous =
+        previous_it == views_.end() ? nullptr : previous_it->second;
+    const bool unchanged = previous && model_versions_[id] == object.version &&
+                           previous->confirmed == is_confirmed &&
+                           previous->observations == static_cast<int>(object.observations.size());
+    if (unchanged) {
+      snapshot->objects.emplace(id, previous);
+      continue;
+    }
+    auto view = MakeView(object, is_confirmed, version, previous);
+    (previous ? local.updated : local.added).push_back(id);
+    if (previous) Touch(previous->class_id, version);
+    Touch(view->class_id, version);
+    model_versions_[id] = object.version;
+    snapshot->objects.emplace(id, view);
+  }
+  for (const auto& [id, view] : views_) {
+    if (snapshot->objects.count(id) > 0) continue;
+    local.removed.push_back(id);
+    Touch(view->class_id, version);
+    model_versions_.erase(id);
+  }
+  views_ = snapshot->objects;
+
+  std::map<int, InventoryEntry> by_class;
+  for (const auto& [id, view] : snapshot->objects) {
+    if (!view->confirmed) continue;
+    InventoryEntry& entry = by_class[view->class_id];
+    entry.class_id = view->class_id;
+    ++entry.count;
+    entry.mean_confidence += view->confidence;
+    entry.objects.push_back(id);
+  }
+  for (auto& [class_id, entry] : by_class) {
+    entry.mean_confidence /= static_cast<float>(entry.count);
+    snapshot->inventory.push_back(entry);
+  }
+  std::stable_sort(snapshot->inventory.begin(), snapshot->inventory.end(),
+                   [](const InventoryEntry& a, const InventoryEntry& b) { return a.count > b.count; });
+  snapshot->class_changed_version.assign(class_changed_version_.begin(),
+                                         class_changed_version_.end());
+  if (diff != nullptr) *diff = std::move(local);
+  return snapshot;
+}
+
+}  // namespace objmap

@@ -1,0 +1,37 @@
+#pragma once
+// Private to map_server: turns the mapper's mutable object map into immutable snapshots.
+
+#include <array>
+#include <map>
+#include <memory>
+
+#include "map_server/map_server.h"
+
+namespace objmap {
+
+/// Builds snapshots on the mapping thread, reusing the views (and point models) of objects that
+/// did not change, and remembers which classes changed at which version (Inventory since).
+/// Thread-safety: none (mapping thread only); the snapshots it returns are immutable.
+class SnapshotBuilder {
+ public:
+  /// What changed between the previous snapshot and this one.
+  struct Diff {
+    std::vector<ObjectId> added, updated, removed;
+  };
+
+  /// A snapshot of `mapper` at `version`; `diff` (may be null) receives the object changes.
+  std::shared_ptr<const MapSnapshot> Build(const Mapper& mapper, std::uint64_t version,
+                                           Diff* diff);
+
+ private:
+  std::shared_ptr<const ObjectView> MakeView(const MapObject& object, bool confirmed,
+                                             std::uint64_t version,
+                                             const std::shared_ptr<const ObjectView>& previous);
+  void Touch(int class_id, std::uint64_t version);
+
+  std::map<ObjectId, std::shared_ptr<const ObjectView>> views_;
+  std::map<ObjectId, std::uint64_t> model_versions_;  // MapObject::version behind each view
+  std::array<std::uint64_t, kNumCocoClasses> class_changed_version_{};
+};
+
+}  // namespace objmap

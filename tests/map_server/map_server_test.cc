@@ -1,0 +1,289 @@
+#include "map_server/map_server.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <thread>
+
+#include "test_scenes.h"
+#include "types/coco_classes.h"
+
+namespace objmap {
+namespace {
+
+using testing::SceneBox;
+
+const int kCup = CocoClassId("cup");
+
+// A table top with two cups and a wall behind, seen from three viewpoints; the server's store is
+// a real SQLite file in a temporary directory.
+class MapServerScene : public ::testing::Test {
+ protected:
+  MapServerScene() {
+    boxes_ = {
+        {{-0.6, -0.8, 0.60}, {0.6, 0.8, 0.70}, {150, 100, 60}},      // table top
+        {{-0.05, -0.25, 0.70}, {0.05, -0.15, 0.82}, {200, 30, 30}},  // cup 1
+        {{-0.05, 0.15, 0.70}, {0.05, 0.25, 0.82}, {30, 30, 200}},    // cup 2
+        {{1.5, -2.0, 0.0}, {1.6, 2.0, 2.5}, {220, 220, 220}},        // wall
+    };
+    eyes_ = {{-1.0, 0.0, 1.3}, {-1.0, 0.25, 1.3}, {-0.95, -0.25, 1.35}};
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    db_path_ = ::testing::TempDir() + "objmap_map_server_" + std::to_string(getpid()) + "_" +
+               info->name() + ".db";
+    RemoveDatabase();
+  }
+  ~MapServerScene() override { RemoveDatabase(); }
+
+  void RemoveDatabase() const {
+    for (const char* suffix : {"", "-wal", "-shm"}) std::remove((db_path_ + suffix).c_str());
+  }
+
+  std::unique_ptr<MapServer> OpenServer() const {
+    std::string why;
+    auto server = MapServer::Open(MapServerConfig{}, db_path_, nullptr, &why);
+    EXPECT_TRUE(server) << why;
+    return server;
+  }
+
+  Eigen::Isometry3d Pose(int view) const {
+    return testing::LookAt(eyes_[view], Eigen::Vector3d(0, 0, 0.7));
+  }
+  std::vector<Detection> CupDetections(int view) const {
+    return {{testing::ProjectBox(boxes_[1], Pose(view), K_), kCup, 0.6f},
+            {testing::ProjectBox(boxes_[2], Pose(view), K_), kCup, 0.5f}};
+  }
+
+  void IngestAllViews(MapServer* server) const {
+    for (int view = 0; view < 3; ++view) {
+      RgbdFrame frame = testing::RenderFrame(boxes_, K_, Pose(view), "view-" + std::to_string(view));
+      AddKeyframeOutcome outcome;
+      const ServiceStatus status = server->AddKeyframe(frame, CupDetections(view), &outcome);
+      ASSERT_TRUE(status.ok()) << status.message;
+      EXPECT_EQ(outcome.keyframe_id, view + 1);
+      EXPECT_EQ(outcome.detections_used, 2);
+    }
+  }
+
+  std::vector<std::shared_ptr<const ObjectView>> Cups(const MapServer& server) const {
+    ObjectFilter filter;
+    filter.class_id = kCup;
+    std::vector<std::shared_ptr<const ObjectView>> cups;
+    std::uint64_t version = 0;
+    EXPECT_TRUE(server.QueryObjects(filter, &cups, &version).ok());
+    return cups;
+  }
+
+  CameraIntrinsics K_;
+  std::vector<SceneBox> boxes_;
+  std::vector<Eigen::Vector3d> eyes_;
+  std::string db_path_;
+};
+
+TEST_F(MapServerScene, QueriesByClassRegionAndNearest) {
+  auto server = OpenServer();
+  ASSERT_TRUE(server);
+  IngestAllViews(server.get());
+  EXPECT_EQ(server->Status().map_version, 3u);
+  EXPECT_EQ(server->Status().keyframes, 3u);
+
+  const auto cups = Cups(*server);
+  ASSERT_EQ(cups.size(), 2u);
+  for (const auto& cup : cups) {
+    EXPECT_NEAR(cup->centroid_W.z(), 0.76, 0.05);
+    EXPECT_EQ(cup->observations, 3);
+    ASSERT_TRUE(cup->model_W);
+    EXPECT_GT(cup->model_W->size(), 100u);
+  }
+
+  ObjectFilter region;  // only the cup at y > 0
+  region.region = {{-0.2, 0.0, 0.6}, {0.2, 0.4, 1.0}};
+  std::vector<std::shared_ptr<const ObjectView>> found;
+  std::uint64_t version = 0;
+  ASSERT_TRUE(server->QueryObjects(region, &found, &version).ok());
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_GT(found[0]->centroid_W.y(), 0.1f);
+  EXPECT_EQ(version, 3u);
+
+  ObjectFilter nearest;
+  nearest.nearest_to = Eigen::Vector3d(0.0, -0.2, 0.8);
+  nearest.max_results = 1;
+  ASSERT_TRUE(server->QueryObjects(nearest, &found, &version).ok());
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_LT(found[0]->centroid_W.y(), -0.1f);
+
+  std::shared_ptr<const ObjectView> object;
+  EXPECT_TRUE(server->GetObject(found[0]->id, &object).ok());
+  const ServiceStatus missing = server->GetObject(999, &object);
+  EXPECT_EQ(missing.code, StatusCode::kNotFound);
+  EXPECT_NE(missing.message.find("999"), std::string::npos);
+
+  std::vector<InventoryEntry> inventory;
+  ASSERT_TRUE(server->Inventory(std::nullopt, &inventory, &version).ok());
+  ASSERT_EQ(inventory.size(), 1u);
+  EXPECT_EQ(inventory[0].class_id, kCup);
+  EXPECT_EQ(inventory[0].count, 2);
+}
+
+TEST_F(MapServerScene, BadRequestsNameTheFieldAndChangeNothing) {
+  auto server = OpenServer();
+  ASSERT_TRUE(server);
+  IngestAllViews(server.get());
+
+  RgbdFrame frame = testing::RenderFrame(boxes_, K_, Pose(0), "bad");
+  frame.depth.depth_m.resize(10);
+  AddKeyframeOutcome outcome;
+  ServiceStatus status = server->AddKeyframe(frame, CupDetections(0), &outcome);
+  EXPECT_EQ(status.code, StatusCode::kInvalidArgument);
+
+  ObjectFilter inverted;
+  inverted.region = {{1.0, 0.0, 0.0}, {0.0, 1.0, 1.0}};
+  std::vector<std::shared_ptr<const ObjectView>> found;
+  std::uint64_t version = 0;
+  status = server->QueryObjects(inverted, &found, &version);
+  EXPECT_EQ(status.code, StatusCode::kInvalidArgument);
+  EXPECT_NE(status.message.find("region.min.x"), std::string::npos) << status.message;
+
+  PoseUpdateOutcome pose_outcome;
+  status = server->UpdatePoses({{42, Eigen::Isometry3d::Identity()}}, true, &pose_outcome);
+  EXPECT_EQ(status.code, StatusCode::kNotFound);
+  EXPECT_NE(status.message.find("42"), std::string::npos);
+  Eigen::Isometry3d nan_pose = Eigen::Isometry3d::Identity();
+  nan_pose.translation().x() = std::numeric_limits<double>::quiet_NaN();
+  status = server->UpdatePoses({{1, nan_pose}}, true, &pose_outcome);
+  EXPECT_EQ(status.code, StatusCode::kInvalidArgument);
+
+  EXPECT_EQ(server->Status().map_version, 3u);
+  EXPECT_EQ(Cups(*server).size(), 2u);
+}
+
+TEST_F(MapServerScene, RestartRestoresTheSameMap) {
+  std::vector<std::shared_ptr<const ObjectView>> before;
+  {
+    auto server = OpenServer();
+    ASSERT_TRUE(server);
+    IngestAllViews(server.get());
+    before = Cups(*server);
+  }
+  auto server = OpenServer();
+  ASSERT_TRUE(server);
+  EXPECT_EQ(server->Status().keyframes, 3u);
+  EXPECT_EQ(server->Status().map_version, 3u);
+  const auto after = Cups(*server);
+  ASSERT_EQ(after.size(), before.size());
+  for (std::size_t i = 0; i < after.size(); ++i) {
+    EXPECT_EQ(after[i]->id, before[i]->id);
+    EXPECT_EQ(after[i]->class_id, before[i]->class_id);
+    EXPECT_FLOAT_EQ(after[i]->confidence, before[i]->confidence);
+    EXPECT_LT((after[i]->centroid_W - before[i]->centroid_W).norm(), 1e-4);
+  }
+  // New keyframes continue the ids.
+  RgbdFrame frame = testing::RenderFrame(boxes_, K_, Pose(0), "again");
+  AddKeyframeOutcome outcome;
+  ASSERT_TRUE(server->AddKeyframe(frame, CupDetections(0), &outcome).ok());
+  EXPECT_EQ(outcome.keyframe_id, 4);
+  EXPECT_EQ(outcome.map_version, 4u);
+  EXPECT_EQ(outcome.created.size(), 0u);
+}
+
+TEST_F(MapServerScene, PoseUpdateMovesObjectsAndOccupancy) {
+  auto server = OpenServer();
+  ASSERT_TRUE(server);
+  IngestAllViews(server.get());
+  const auto before = Cups(*server);
+  bool free = false;
+  RegionOccupancy counts;
+  std::uint64_t version = 0;
+  const Eigen::Vector3d air_min(-0.5, -0.1, 1.0), air_max(-0.4, 0.0, 1.1);
+  ASSERT_TRUE(server->IsFree(air_min, air_max, false, &free, &counts, &version).ok());
+  EXPECT_TRUE(free) << counts.occupied << " occupied, " << counts.unknown << " unknown";
+  const Eigen::Vector3d table_min(-0.3, -0.05, 0.68), table_max(-0.2, 0.05, 0.72);
+  ASSERT_TRUE(server->IsFree(table_min, table_max, false, &free, &counts, &version).ok());
+  EXPECT_FALSE(free);
+
+  Eigen::Isometry3d G = Eigen::Isometry3d::Identity();  // a rigid correction of every pose
+  G.translate(Eigen::Vector3d(0.5, -0.3, 0.1));
+  G.rotate(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()));
+  std::map<KeyframeId, Eigen::Isometry3d> poses;
+  for (int view = 0; view < 3; ++view) poses[view + 1] = G * Pose(view);
+
+  // Queries keep answering while the regeneration runs.
+  std::atomic<bool> done{false};
+  std::atomic<int> answered_while_regenerating{0};
+  std::thread reader([&] {
+    while (!done) {
+      std::vector<std::shared_ptr<const ObjectView>> found;
+      std::uint64_t v = 0;
+      bool f = false;
+      RegionOccupancy c;
+      const bool regenerating = server->Status().regenerating;
+      if (server->QueryObjects(ObjectFilter{}, &found, &v).ok() &&
+          server->IsFree(air_min, air_max, false, &f, &c, &v).ok() && regenerating) {
+        ++answered_while_regenerating;
+      }
+    }
+  });
+  PoseUpdateOutcome outcome;
+  const ServiceStatus status = server->UpdatePoses(poses, true, &outcome);
+  done = true;
+  reader.join();
+  ASSERT_TRUE(status.ok()) << status.message;
+  EXPECT_TRUE(outcome.regenerated);
+  EXPECT_EQ(outcome.keyframes_moved, 3);
+  EXPECT_EQ(outcome.map_version, 4u);
+  EXPECT_GT(answered_while_regenerating.load(), 0);
+
+  const auto after = Cups(*server);
+  ASSERT_EQ(after.size(), before.size());
+  for (std::size_t i = 0; i < after.size(); ++i) {
+    EXPECT_EQ(after[i]->id, before[i]->id);
+    const Eigen::Vector3f expected = (G * before[i]->centroid_W.cast<double>()).cast<float>();
+    EXPECT_LT((after[i]->centroid_W - expected).norm(), 0.01f);
+  }
+  // The table top moved with the poses.
+  const Eigen::Vector3d moved_table = G * Eigen::Vector3d(-0.25, 0.0, 0.70);
+  ASSERT_TRUE(server->IsFree(moved_table - Eigen::Vector3d::Constant(0.03),
+                             moved_table + Eigen::Vector3d::Constant(0.03), false, &free, &counts,
+                             &version)
+                  .ok());
+  EXPECT_GT(counts.occupied, 0u);
+
+  // A restart regenerates with the stored poses.
+  server.reset();
+  server = OpenServer();
+  ASSERT_TRUE(server);
+  const auto restored = Cups(*server);
+  ASSERT_EQ(restored.size(), after.size());
+  for (std::size_t i = 0; i < after.size(); ++i) {
+    EXPECT_LT((restored[i]->centroid_W - after[i]->centroid_W).norm(), 1e-4);
+  }
+}
+
+TEST_F(MapServerScene, ChangesAndInventorySinceAVersion) {
+  auto server = OpenServer();
+  ASSERT_TRUE(server);
+  EXPECT_TRUE(server->ChangesSince(0, std::chrono::milliseconds(10)).empty());
+  IngestAllViews(server.get());
+  const auto changes = server->ChangesSince(0, std::chrono::milliseconds(10));
+  ASSERT_EQ(changes.size(), 3u);
+  EXPECT_EQ(changes[0].version, 1u);
+  EXPECT_EQ(changes[0].added.size(), 2u);
+  EXPECT_EQ(changes[2].keyframe_id, 3);
+  EXPECT_EQ(server->ChangesSince(2, std::chrono::milliseconds(10)).size(), 1u);
+
+  std::vector<InventoryEntry> entries;
+  std::uint64_t version = 0;
+  ASSERT_TRUE(server->Inventory(std::uint64_t{3}, &entries, &version).ok());
+  EXPECT_TRUE(entries.empty());
+  ASSERT_TRUE(server->Inventory(std::uint64_t{0}, &entries, &version).ok());
+  ASSERT_EQ(entries.size(), 1u);
+  EXPECT_EQ(entries[0].class_id, kCup);
+  EXPECT_EQ(server->Inventory(std::uint64_t{99}, &entries, &version).code,
+            StatusCode::kInvalidArgument);
+}
+
+}  // namespace
+}  // namespace objmap
