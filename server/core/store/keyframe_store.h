@@ -49,7 +49,9 @@ struct StoredObjectSummary {
 };
 
 /// One atomic change of the store: everything a mapping step did. Applied in one transaction:
-/// either all of it is on disk when Commit returns true, or none of it.
+/// either all of it is on disk when Commit returns true, or none of it. Applied in this order:
+/// keyframe, observations, merged, removed_objects, object_summaries, poses, metadata (so
+/// observations of this change follow its merges and removals).
 struct StoreChange {
   std::optional<StoredKeyframe> keyframe;          ///< a new keyframe
   std::vector<StoredObservation> observations;     ///< observations to insert
@@ -86,8 +88,9 @@ struct KeyframeStoreConfig {
 /// SQLite file (WAL journal, schema version in PRAGMA user_version) holding keyframes,
 /// detections, observations (segments) and object summaries. Depth is stored as 16-bit PNG
 /// (lossless), the object mask as 8-bit PNG, colour as JPEG.
-/// Thread-safety: one writer; const methods may run concurrently with each other and with
-/// Commit (each call uses its own read connection or serializes on an internal mutex).
+/// Thread-safety: all methods may be called from any thread. Commit calls serialize on an
+/// internal mutex (one write connection); const methods each borrow a read connection of their
+/// own and run concurrently with each other and with Commit, seeing the last committed state.
 class KeyframeStore {
  public:
   ~KeyframeStore();
@@ -113,7 +116,8 @@ class KeyframeStore {
   /// Bytes of the database file plus its WAL.
   [[nodiscard]] std::uint64_t FileBytes() const;
   /// Total stored bytes per table column group for one keyframe: depth, mask, colour,
-  /// observations (benchmarks: bytes stored per keyframe).
+  /// observations (benchmarks: bytes stored per keyframe). `total` adds the pose and detection
+  /// blobs. All zero for an unknown id.
   struct KeyframeBytes {
     std::uint64_t depth = 0, mask = 0, color = 0, observations = 0, total = 0;
   };

@@ -1,0 +1,231 @@
+#include "store/keyframe_codec.h"
+
+#include <cstring>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+namespace objmap {
+namespace store_internal {
+namespace {
+
+// Blobs are written in the host's byte order with memcpy; every platform we build on is
+// little-endian, which keeps files portable between them.
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "store blobs assume little-endian");
+
+template <typename T>
+void Append(const T& value, Bytes* out) {
+  const auto* bytes = reinterpret_cast<const std::uint8_t*>(&value);
+  out->insert(out->end(), bytes, bytes + sizeof(T));
+}
+
+template <typename T>
+T Read(const std::uint8_t* data, std::size_t offset) {
+  T value;
+  std::memcpy(&value, data + offset, sizeof(T));
+  return value;
+}
+
+// RGB <-> BGR (OpenCV's codecs speak BGR); `bytes` is a multiple of 3.
+void SwapRedBlue(const std::uint8_t* in, std::uint8_t* out, std::size_t bytes) {
+  for (std::size_t i = 0; i < bytes; i += 3) {
+    out[i] = in[i + 2];
+    out[i + 1] = in[i + 1];
+    out[i + 2] = in[i];
+  }
+}
+
+// PNG level 1: storing a keyframe sits on the ingest path, where speed matters more than the
+// few percent higher levels save on depth images.
+bool EncodePng(const cv::Mat& image, Bytes* png, std::string* why) {
+  try {
+    if (cv::imencode(".png", image, *png, {cv::IMWRITE_PNG_COMPRESSION, 1})) return true;
+    *why = "PNG encoding failed";
+  } catch (const cv::Exception& e) {
+    *why = std::string("PNG encoding failed: ") + e.what();
+  }
+  return false;
+}
+
+// Decodes with `flags` and checks type and size; never throws.
+bool DecodeImage(const std::uint8_t* data, std::size_t bytes, int flags, int type, int width,
+                 int height, cv::Mat* image, std::string* why) {
+  if (bytes == 0) {
+    *why = "empty image blob";
+    return false;
+  }
+  try {
+    const cv::Mat encoded(1, static_cast<int>(bytes), CV_8UC1, const_cast<std::uint8_t*>(data));
+    *image = cv::imdecode(encoded, flags);
+  } catch (const cv::Exception& e) {
+    *why = std::string("image decoding failed: ") + e.what();
+    return false;
+  }
+  if (image->empty() || image->type() != type || image->cols != width || image->rows != height) {
+    *why = "image blob does not decode to a " + std::to_string(width) + "x" +
+           std::to_string(height) + " image of the stored type";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool EncodeDepthPng(const std::vector<std::uint16_t>& depth_mm, int width, int height, Bytes* png,
+                    std::string* why) {
+  const cv::Mat image(height, width, CV_16UC1, const_cast<std::uint16_t*>(depth_mm.data()));
+  return EncodePng(image, png, why);
+}
+
+bool EncodeMaskPng(const std::vector<std::uint8_t>& mask, int width, int height, Bytes* png,
+                   std::string* why) {
+  const cv::Mat image(height, width, CV_8UC1, const_cast<std::uint8_t*>(mask.data()));
+  return EncodePng(image, png, why);
+}
+
+bool EncodeColorJpeg(const ColorImage& color, int quality, Bytes* jpeg, std::string* why) {
+  cv::Mat bgr(color.height, color.width, CV_8UC3);
+  SwapRedBlue(color.rgb.data(), bgr.data, color.rgb.size());
+  try {
+    if (cv::imencode(".jpg", bgr, *jpeg, {cv::IMWRITE_JPEG_QUALITY, quality})) return true;
+    *why = "JPEG encoding failed";
+  } catch (const cv::Exception& e) {
+    *why = std::string("JPEG encoding failed: ") + e.what();
+  }
+  return false;
+}
+
+bool DecodeDepthPng(const std::uint8_t* png, std::size_t bytes, int width, int height,
+                    std::vector<std::uint16_t>* depth_mm, std::string* why) {
+  cv::Mat image;
+  if (!DecodeImage(png, bytes, cv::IMREAD_UNCHANGED, CV_16UC1, width, height, &image, why)) {
+    return false;
+  }
+  depth_mm->resize(static_cast<std::size_t>(width) * height);
+  for (int v = 0; v < height; ++v) {
+    std::memcpy(depth_mm->data() + static_cast<std::size_t>(v) * width, image.ptr(v),
+                sizeof(std::uint16_t) * width);
+  }
+  return true;
+}
+
+bool DecodeMaskPng(const std::uint8_t* png, std::size_t bytes, int width, int height,
+                   std::vector<std::uint8_t>* mask, std::string* why) {
+  cv::Mat image;
+  if (!DecodeImage(png, bytes, cv::IMREAD_UNCHANGED, CV_8UC1, width, height, &image, why)) {
+    return false;
+  }
+  mask->resize(static_cast<std::size_t>(width) * height);
+  for (int v = 0; v < height; ++v) {
+    std::memcpy(mask->data() + static_cast<std::size_t>(v) * width, image.ptr(v), width);
+  }
+  return true;
+}
+
+bool DecodeColorJpeg(const std::uint8_t* jpeg, std::size_t bytes, int width, int height,
+                     ColorImage* color, std::string* why) {
+  cv::Mat bgr;
+  if (!DecodeImage(jpeg, bytes, cv::IMREAD_COLOR, CV_8UC3, width, height, &bgr, why)) {
+    return false;
+  }
+  color->width = width;
+  color->height = height;
+  color->rgb.resize(static_cast<std::size_t>(width) * height * 3);
+  for (int v = 0; v < height; ++v) {
+    SwapRedBlue(bgr.ptr(v), color->rgb.data() + static_cast<std::size_t>(v) * width * 3,
+                static_cast<std::size_t>(width) * 3);
+  }
+  return true;
+}
+
+Bytes PackPose(const Eigen::Isometry3d& T) {
+  Bytes out(16 * sizeof(double));
+  std::memcpy(out.data(), T.matrix().data(), out.size());  // Eigen default: column-major
+  return out;
+}
+
+bool UnpackPose(const std::uint8_t* data, std::size_t bytes, Eigen::Isometry3d* T) {
+  if (bytes != 16 * sizeof(double)) return false;
+  std::memcpy(T->matrix().data(), data, bytes);
+  return true;
+}
+
+Bytes PackDetections(const std::vector<Detection>& detections) {
+  Bytes out;
+  out.reserve(detections.size() * 24);
+  for (const Detection& d : detections) {
+    Append(d.box.x_min, &out);
+    Append(d.box.y_min, &out);
+    Append(d.box.x_max, &out);
+    Append(d.box.y_max, &out);
+    Append(static_cast<std::int32_t>(d.class_id), &out);
+    Append(d.score, &out);
+  }
+  return out;
+}
+
+bool UnpackDetections(const std::uint8_t* data, std::size_t bytes,
+                      std::vector<Detection>* detections) {
+  if (bytes % 24 != 0) return false;
+  detections->resize(bytes / 24);
+  for (std::size_t i = 0; i < detections->size(); ++i) {
+    const std::size_t at = 24 * i;
+    Detection& d = (*detections)[i];
+    d.box = {Read<float>(data, at), Read<float>(data, at + 4), Read<float>(data, at + 8),
+             Read<float>(data, at + 12)};
+    d.class_id = Read<std::int32_t>(data, at + 16);
+    d.score = Read<float>(data, at + 20);
+  }
+  return true;
+}
+
+Bytes PackClassScores(const std::vector<std::pair<int, float>>& scores) {
+  Bytes out;
+  out.reserve(scores.size() * 8);
+  for (const auto& [class_id, score] : scores) {
+    Append(static_cast<std::int32_t>(class_id), &out);
+    Append(score, &out);
+  }
+  return out;
+}
+
+bool UnpackClassScores(const std::uint8_t* data, std::size_t bytes,
+                       std::vector<std::pair<int, float>>* scores) {
+  if (bytes % 8 != 0) return false;
+  scores->resize(bytes / 8);
+  for (std::size_t i = 0; i < scores->size(); ++i) {
+    (*scores)[i] = {Read<std::int32_t>(data, 8 * i), Read<float>(data, 8 * i + 4)};
+  }
+  return true;
+}
+
+Bytes PackPoints(const ColoredPoints& points) {
+  Bytes out(points.points.size() * 3 * sizeof(float));
+  for (std::size_t i = 0; i < points.points.size(); ++i) {
+    std::memcpy(out.data() + 12 * i, points.points[i].data(), 12);
+  }
+  return out;
+}
+
+Bytes PackColors(const ColoredPoints& points) {
+  Bytes out(points.colors.size() * 3);
+  for (std::size_t i = 0; i < points.colors.size(); ++i) {
+    std::memcpy(out.data() + 3 * i, points.colors[i].data(), 3);
+  }
+  return out;
+}
+
+bool UnpackColoredPoints(const std::uint8_t* xyz, std::size_t xyz_bytes, const std::uint8_t* rgb,
+                         std::size_t rgb_bytes, ColoredPoints* points) {
+  const std::size_t n = xyz_bytes / 12;
+  if (xyz_bytes % 12 != 0 || (rgb_bytes != 0 && rgb_bytes != 3 * n)) return false;
+  points->points.resize(n);
+  for (std::size_t i = 0; i < n; ++i) std::memcpy(points->points[i].data(), xyz + 12 * i, 12);
+  points->colors.resize(rgb_bytes / 3);
+  for (std::size_t i = 0; i < points->colors.size(); ++i) {
+    std::memcpy(points->colors[i].data(), rgb + 3 * i, 3);
+  }
+  return true;
+}
+
+}  // namespace store_internal
+}  // namespace objmap

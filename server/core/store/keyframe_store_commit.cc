@@ -1,0 +1,240 @@
+// KeyframeStore::Commit: validation and encoding outside the write lock, then one transaction.
+
+#include <initializer_list>
+#include <optional>
+#include <utility>
+
+#include "store/keyframe_codec.h"
+#include "store/keyframe_store.h"
+#include "store/store_impl.h"
+
+namespace objmap {
+namespace {
+
+using store_internal::Bytes;
+using store_internal::Connection;
+
+struct EncodedKeyframe {
+  Bytes pose, depth_png, mask_png, color_jpeg, detections;
+};
+
+bool IsFinite(const Eigen::Isometry3d& T) { return T.matrix().allFinite(); }
+
+// Sizes are checked here, before anything is written, so the reason can name the field.
+bool CheckKeyframe(const StoredKeyframe& keyframe, std::string* why) {
+  const std::string prefix = "keyframe " + std::to_string(keyframe.id) + ": ";
+  const CameraIntrinsics& k = keyframe.intrinsics;
+  if (!k.IsValid(why)) {
+    *why = prefix + "intrinsics: " + *why;
+    return false;
+  }
+  const std::size_t pixels = static_cast<std::size_t>(k.width) * k.height;
+  const std::string size = std::to_string(k.width) + "x" + std::to_string(k.height);
+  if (keyframe.depth_mm.size() != pixels) {
+    *why = prefix + "depth_mm has " + std::to_string(keyframe.depth_mm.size()) +
+           " values, intrinsics are " + size;
+  } else if (keyframe.object_mask.size() != pixels) {
+    *why = prefix + "object_mask has " + std::to_string(keyframe.object_mask.size()) +
+           " values, intrinsics are " + size;
+  } else if (!keyframe.color.empty() &&
+             (keyframe.color.width != k.width || keyframe.color.height != k.height ||
+              keyframe.color.rgb.size() != 3 * pixels)) {
+    *why = prefix + "color is " + std::to_string(keyframe.color.width) + "x" +
+           std::to_string(keyframe.color.height) + " with " +
+           std::to_string(keyframe.color.rgb.size()) + " bytes, intrinsics are " + size;
+  } else if (!IsFinite(keyframe.T_W_C)) {
+    *why = prefix + "T_W_C is not finite";
+  } else {
+    return true;
+  }
+  return false;
+}
+
+bool EncodeKeyframe(const StoredKeyframe& keyframe, int jpeg_quality, EncodedKeyframe* encoded,
+                    std::string* why) {
+  if (!CheckKeyframe(keyframe, why)) return false;
+  const int width = keyframe.intrinsics.width, height = keyframe.intrinsics.height;
+  const std::string prefix = "keyframe " + std::to_string(keyframe.id) + ": ";
+  std::string reason;
+  if (!store_internal::EncodeDepthPng(keyframe.depth_mm, width, height, &encoded->depth_png,
+                                      &reason) ||
+      !store_internal::EncodeMaskPng(keyframe.object_mask, width, height, &encoded->mask_png,
+                                     &reason) ||
+      (!keyframe.color.empty() &&
+       !store_internal::EncodeColorJpeg(keyframe.color, jpeg_quality, &encoded->color_jpeg,
+                                        &reason))) {
+    *why = prefix + reason;
+    return false;
+  }
+  encoded->pose = store_internal::PackPose(keyframe.T_W_C);
+  encoded->detections = store_internal::PackDetections(keyframe.detections);
+  return true;
+}
+
+bool CheckChange(const StoreChange& change, std::string* why) {
+  for (const StoredObservation& o : change.observations) {
+    const ColoredPoints& segment = o.observation.segment_C;
+    if (!segment.colors.empty() && segment.colors.size() != segment.points.size()) {
+      *why = "observation of object " + std::to_string(o.object_id) + " in keyframe " +
+             std::to_string(o.observation.keyframe_id) + ": segment_C has " +
+             std::to_string(segment.points.size()) + " points but " +
+             std::to_string(segment.colors.size()) + " colors";
+      return false;
+    }
+  }
+  for (const auto& [id, T_W_C] : change.poses) {
+    if (!IsFinite(T_W_C)) {
+      *why = "pose of keyframe " + std::to_string(id) + " is not finite";
+      return false;
+    }
+  }
+  return true;
+}
+
+bool InsertKeyframe(Connection* db, const StoredKeyframe& k, const EncodedKeyframe& e,
+                    std::string* why) {
+  auto insert = db->Prepare(
+      "INSERT INTO keyframes(id, stamp_s, name, T_W_C, width, height, fx, fy, cx, cy, depth_png,"
+      " mask_png, color_jpeg, detections) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+      "insert keyframe " + std::to_string(k.id), why);
+  if (!insert) return false;
+  insert->Bind(1, std::int64_t{k.id}).Bind(2, k.stamp_s).Bind(3, k.name);
+  insert->BindBlob(4, e.pose.data(), e.pose.size());
+  insert->Bind(5, std::int64_t{k.intrinsics.width}).Bind(6, std::int64_t{k.intrinsics.height});
+  insert->Bind(7, k.intrinsics.fx).Bind(8, k.intrinsics.fy);
+  insert->Bind(9, k.intrinsics.cx).Bind(10, k.intrinsics.cy);
+  insert->BindBlob(11, e.depth_png.data(), e.depth_png.size());
+  insert->BindBlob(12, e.mask_png.data(), e.mask_png.size());
+  if (k.color.empty()) {
+    insert->BindNull(13);
+  } else {
+    insert->BindBlob(13, e.color_jpeg.data(), e.color_jpeg.size());
+  }
+  insert->BindBlob(14, e.detections.data(), e.detections.size());
+  if (insert->Run(why)) return true;
+  if (insert->error_code() == SQLITE_CONSTRAINT_PRIMARYKEY) {
+    *why = "keyframe id " + std::to_string(k.id) + " already exists";
+  }
+  return false;
+}
+
+bool InsertObservation(Connection* db, const StoredObservation& o, std::string* why) {
+  const ObjectObservation& obs = o.observation;
+  auto insert = db->Prepare(
+      "INSERT INTO observations(object_id, keyframe_id, box_x_min, box_y_min, box_x_max,"
+      " box_y_max, class_scores, points, colors) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
+      "insert observation of object " + std::to_string(o.object_id), why);
+  if (!insert) return false;
+  const Bytes scores = store_internal::PackClassScores(obs.class_scores);
+  const Bytes points = store_internal::PackPoints(obs.segment_C);
+  const Bytes colors = store_internal::PackColors(obs.segment_C);
+  insert->Bind(1, std::int64_t{o.object_id}).Bind(2, std::int64_t{obs.keyframe_id});
+  insert->Bind(3, double{obs.box.x_min}).Bind(4, double{obs.box.y_min});
+  insert->Bind(5, double{obs.box.x_max}).Bind(6, double{obs.box.y_max});
+  insert->BindBlob(7, scores.data(), scores.size());
+  insert->BindBlob(8, points.data(), points.size());
+  insert->BindBlob(9, colors.data(), colors.size());
+  if (insert->Run(why)) return true;
+  if (insert->error_code() == SQLITE_CONSTRAINT_FOREIGNKEY) {
+    *why = "observation of object " + std::to_string(o.object_id) + ": unknown keyframe id " +
+           std::to_string(obs.keyframe_id);
+  }
+  return false;
+}
+
+// Runs `sql` with `ids` bound in order; *changed (optional) gets the number of changed rows.
+bool RunWithIds(Connection* db, const char* sql, const std::string& label,
+                std::initializer_list<std::int64_t> ids, std::string* why, int* changed = nullptr) {
+  auto statement = db->Prepare(sql, label, why);
+  if (!statement) return false;
+  int index = 1;
+  for (const std::int64_t id : ids) statement->Bind(index++, id);
+  if (!statement->Run(why)) return false;
+  if (changed != nullptr) *changed = db->changes();
+  return true;
+}
+
+bool ApplyObjectChanges(Connection* db, const StoreChange& change, std::string* why) {
+  for (const StoredObservation& o : change.observations) {
+    if (!InsertObservation(db, o, why)) return false;
+  }
+  for (const auto& [kept, absorbed] : change.merged) {
+    const std::string label =
+        "merge object " + std::to_string(absorbed) + " into " + std::to_string(kept);
+    if (!RunWithIds(db, "UPDATE observations SET object_id = ? WHERE object_id = ?", label,
+                    {kept, absorbed}, why) ||
+        !RunWithIds(db, "DELETE FROM objects WHERE id = ?", label, {absorbed}, why)) {
+      return false;
+    }
+  }
+  for (const ObjectId id : change.removed_objects) {
+    const std::string label = "remove object " + std::to_string(id);
+    if (!RunWithIds(db, "DELETE FROM observations WHERE object_id = ?", label, {id}, why) ||
+        !RunWithIds(db, "DELETE FROM objects WHERE id = ?", label, {id}, why)) {
+      return false;
+    }
+  }
+  for (const StoredObjectSummary& s : change.object_summaries) {
+    auto upsert = db->Prepare(
+        "INSERT OR REPLACE INTO objects(id, class_id, confidence, centroid_x, centroid_y,"
+        " centroid_z, observations) VALUES (?, ?, ?, ?, ?, ?, ?)",
+        "store summary of object " + std::to_string(s.id), why);
+    if (!upsert) return false;
+    upsert->Bind(1, std::int64_t{s.id}).Bind(2, std::int64_t{s.class_id});
+    upsert->Bind(3, double{s.confidence}).Bind(4, double{s.centroid_W.x()});
+    upsert->Bind(5, double{s.centroid_W.y()}).Bind(6, double{s.centroid_W.z()});
+    if (!upsert->Bind(7, std::int64_t{s.observations}).Run(why)) return false;
+  }
+  return true;
+}
+
+bool SetMeta(Connection* db, const std::string& key, std::int64_t value, std::string* why) {
+  auto statement =
+      db->Prepare("INSERT OR REPLACE INTO meta(key, value) VALUES (?, ?)", "store " + key, why);
+  return statement && statement->Bind(1, key).Bind(2, value).Run(why);
+}
+
+bool ApplyPosesAndMeta(Connection* db, const StoreChange& change, std::string* why) {
+  for (const auto& [id, T_W_C] : change.poses) {
+    auto update = db->Prepare("UPDATE keyframes SET T_W_C = ? WHERE id = ?",
+                              "update pose of keyframe " + std::to_string(id), why);
+    const Bytes pose = store_internal::PackPose(T_W_C);
+    if (!update || !update->BindBlob(1, pose.data(), pose.size()).Bind(2, id).Run(why)) {
+      return false;
+    }
+    if (db->changes() == 0) {
+      *why = "pose for unknown keyframe id " + std::to_string(id);
+      return false;
+    }
+  }
+  return (!change.map_version ||
+          SetMeta(db, "map_version", static_cast<std::int64_t>(*change.map_version), why)) &&
+         (!change.next_object_id || SetMeta(db, "next_object_id", *change.next_object_id, why));
+}
+
+}  // namespace
+
+// Encoding (the slow part) runs before the write lock is taken; the order inside the
+// transaction is the one StoreChange documents.
+bool KeyframeStore::Commit(const StoreChange& change, std::string* why) {
+  EncodedKeyframe encoded;
+  if ((change.keyframe &&
+       !EncodeKeyframe(*change.keyframe, impl_->config.color_jpeg_quality, &encoded, why)) ||
+      !CheckChange(change, why)) {
+    return false;
+  }
+  std::lock_guard<std::mutex> lock(impl_->write_mutex);
+  Connection* db = impl_->writer.get();
+  std::string reason;
+  const bool ok = db->Exec("BEGIN IMMEDIATE", &reason) &&
+                  (!change.keyframe || InsertKeyframe(db, *change.keyframe, encoded, &reason)) &&
+                  ApplyObjectChanges(db, change, &reason) &&
+                  ApplyPosesAndMeta(db, change, &reason) && db->Exec("COMMIT", &reason);
+  if (!ok) {
+    db->RollbackIfOpen();
+    *why = "nothing committed: " + reason;
+  }
+  return ok;
+}
+
+}  // namespace objmap

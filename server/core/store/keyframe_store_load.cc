@@ -1,0 +1,215 @@
+// KeyframeStore::LoadAll and LoadKeyframe: rows are read inside one read transaction (a
+// consistent snapshot while Commit goes on), images decoded afterwards, in parallel.
+
+#include <algorithm>
+#include <thread>
+
+#include "store/keyframe_codec.h"
+#include "store/keyframe_store.h"
+#include "store/store_impl.h"
+
+namespace objmap {
+namespace {
+
+using store_internal::Bytes;
+using store_internal::Connection;
+using store_internal::Statement;
+
+const char kSelectKeyframes[] =
+    "SELECT id, stamp_s, name, T_W_C, width, height, fx, fy, cx, cy, depth_png, mask_png,"
+    " color_jpeg, detections FROM keyframes";
+
+/// A keyframe row whose images are not decoded yet.
+struct RawKeyframe {
+  StoredKeyframe keyframe;
+  Bytes depth_png, mask_png, color_jpeg;
+};
+
+Bytes CopyBlob(const Statement& row, int column) {
+  std::size_t bytes = 0;
+  const std::uint8_t* data = row.Blob(column, &bytes);
+  return Bytes(data, data + bytes);
+}
+
+bool ReadKeyframeRow(const Statement& row, RawKeyframe* raw, std::string* why) {
+  StoredKeyframe& k = raw->keyframe;
+  k.id = row.Int64(0);
+  k.stamp_s = row.Double(1);
+  k.name = row.Text(2);
+  k.intrinsics.width = static_cast<int>(row.Int64(4));
+  k.intrinsics.height = static_cast<int>(row.Int64(5));
+  k.intrinsics.fx = row.Double(6);
+  k.intrinsics.fy = row.Double(7);
+  k.intrinsics.cx = row.Double(8);
+  k.intrinsics.cy = row.Double(9);
+  std::size_t pose_bytes = 0, detection_bytes = 0;
+  const std::uint8_t* pose = row.Blob(3, &pose_bytes);
+  const std::uint8_t* detections = row.Blob(13, &detection_bytes);
+  if (!store_internal::UnpackPose(pose, pose_bytes, &k.T_W_C) ||
+      !store_internal::UnpackDetections(detections, detection_bytes, &k.detections)) {
+    *why = "keyframe " + std::to_string(k.id) + ": corrupt pose or detections blob";
+    return false;
+  }
+  raw->depth_png = CopyBlob(row, 10);
+  raw->mask_png = CopyBlob(row, 11);
+  raw->color_jpeg = CopyBlob(row, 12);
+  return true;
+}
+
+bool DecodeImages(RawKeyframe* raw, std::string* why) {
+  StoredKeyframe& k = raw->keyframe;
+  const int width = k.intrinsics.width, height = k.intrinsics.height;
+  std::string reason;
+  const char* field = "depth_png";
+  bool ok = store_internal::DecodeDepthPng(raw->depth_png.data(), raw->depth_png.size(), width,
+                                           height, &k.depth_mm, &reason);
+  if (ok) {
+    field = "mask_png";
+    ok = store_internal::DecodeMaskPng(raw->mask_png.data(), raw->mask_png.size(), width, height,
+                                       &k.object_mask, &reason);
+  }
+  if (ok && !raw->color_jpeg.empty()) {
+    field = "color_jpeg";
+    ok = store_internal::DecodeColorJpeg(raw->color_jpeg.data(), raw->color_jpeg.size(), width,
+                                         height, &k.color, &reason);
+  }
+  if (!ok) *why = "keyframe " + std::to_string(k.id) + ": " + field + ": " + reason;
+  Bytes().swap(raw->depth_png);  // the encoded images are not needed any more
+  Bytes().swap(raw->mask_png);
+  Bytes().swap(raw->color_jpeg);
+  return ok;
+}
+
+// PNG decoding dominates a restart; keyframes are independent, so they decode on all cores.
+bool DecodeAll(std::vector<RawKeyframe>* raws, std::string* why) {
+  const std::size_t threads = std::max<std::size_t>(
+      1, std::min<std::size_t>({std::thread::hardware_concurrency(), 8, raws->size() / 4}));
+  std::vector<std::string> errors(threads);
+  std::vector<std::thread> workers;
+  for (std::size_t t = 0; t < threads; ++t) {
+    workers.emplace_back([&, t] {
+      for (std::size_t i = t; i < raws->size() && errors[t].empty(); i += threads) {
+        DecodeImages(&(*raws)[i], &errors[t]);
+      }
+    });
+  }
+  for (std::thread& worker : workers) worker.join();
+  for (const std::string& error : errors) {
+    if (!error.empty()) {
+      *why = error;
+      return false;
+    }
+  }
+  return true;
+}
+
+bool ReadKeyframes(Connection* db, std::vector<RawKeyframe>* raws, std::string* why) {
+  auto rows = db->Prepare(std::string(kSelectKeyframes) + " ORDER BY id", "load keyframes", why);
+  if (!rows) return false;
+  for (bool has_row = true;;) {
+    if (!rows->Step(&has_row, why)) return false;
+    if (!has_row) return true;
+    raws->emplace_back();
+    if (!ReadKeyframeRow(*rows, &raws->back(), why)) return false;
+  }
+}
+
+bool ReadObservations(Connection* db, std::vector<StoredObservation>* observations,
+                      std::string* why) {
+  auto rows = db->Prepare(
+      "SELECT object_id, keyframe_id, box_x_min, box_y_min, box_x_max, box_y_max, class_scores,"
+      " points, colors FROM observations ORDER BY object_id, keyframe_id, id",
+      "load observations", why);
+  if (!rows) return false;
+  for (bool has_row = true;;) {
+    if (!rows->Step(&has_row, why)) return false;
+    if (!has_row) return true;
+    StoredObservation& o = observations->emplace_back();
+    o.object_id = rows->Int64(0);
+    ObjectObservation& obs = o.observation;
+    obs.keyframe_id = rows->Int64(1);
+    obs.box = {static_cast<float>(rows->Double(2)), static_cast<float>(rows->Double(3)),
+               static_cast<float>(rows->Double(4)), static_cast<float>(rows->Double(5))};
+    std::size_t score_bytes = 0, xyz_bytes = 0, rgb_bytes = 0;
+    const std::uint8_t* scores = rows->Blob(6, &score_bytes);
+    const std::uint8_t* xyz = rows->Blob(7, &xyz_bytes);
+    const std::uint8_t* rgb = rows->Blob(8, &rgb_bytes);
+    if (!store_internal::UnpackClassScores(scores, score_bytes, &obs.class_scores) ||
+        !store_internal::UnpackColoredPoints(xyz, xyz_bytes, rgb, rgb_bytes, &obs.segment_C)) {
+      *why = "observation of object " + std::to_string(o.object_id) + " in keyframe " +
+             std::to_string(obs.keyframe_id) + ": corrupt blob";
+      return false;
+    }
+  }
+}
+
+bool ReadObjects(Connection* db, std::vector<StoredObjectSummary>* objects, std::string* why) {
+  auto rows = db->Prepare(
+      "SELECT id, class_id, confidence, centroid_x, centroid_y, centroid_z, observations"
+      " FROM objects ORDER BY id",
+      "load objects", why);
+  if (!rows) return false;
+  for (bool has_row = true;;) {
+    if (!rows->Step(&has_row, why)) return false;
+    if (!has_row) return true;
+    StoredObjectSummary& s = objects->emplace_back();
+    s.id = rows->Int64(0);
+    s.class_id = static_cast<int>(rows->Int64(1));
+    s.confidence = static_cast<float>(rows->Double(2));
+    s.centroid_W = Eigen::Vector3d(rows->Double(3), rows->Double(4), rows->Double(5)).cast<float>();
+    s.observations = static_cast<int>(rows->Int64(6));
+  }
+}
+
+bool ReadMeta(Connection* db, StoredMap* map, std::string* why) {
+  std::int64_t version = 0, next_id = 1;
+  if (!db->QueryInt("SELECT value FROM meta WHERE key = 'map_version'", &version, why) ||
+      !db->QueryInt("SELECT value FROM meta WHERE key = 'next_object_id'", &next_id, why)) {
+    return false;
+  }
+  map->map_version = static_cast<std::uint64_t>(version);
+  map->next_object_id = next_id;
+  return true;
+}
+
+}  // namespace
+
+bool KeyframeStore::LoadAll(StoredMap* map, std::string* why) const {
+  auto reader = impl_->readers->Acquire(why);
+  if (!reader) return false;
+  Connection* db = reader.get();
+  *map = StoredMap{};
+  std::vector<RawKeyframe> raws;
+  std::string reason;
+  // The lease rolls the read transaction back when it returns the connection.
+  if (!db->Exec("BEGIN", &reason) || !ReadMeta(db, map, &reason) ||
+      !ReadKeyframes(db, &raws, &reason) || !ReadObservations(db, &map->observations, &reason) ||
+      !ReadObjects(db, &map->objects, &reason) || !db->Exec("COMMIT", &reason) ||
+      !DecodeAll(&raws, &reason)) {
+    *why = impl_->path + ": " + reason;
+    *map = StoredMap{};
+    return false;
+  }
+  map->keyframes.reserve(raws.size());
+  for (RawKeyframe& raw : raws) map->keyframes.push_back(std::move(raw.keyframe));
+  return true;
+}
+
+bool KeyframeStore::LoadKeyframe(KeyframeId id, StoredKeyframe* keyframe, std::string* why) const {
+  auto reader = impl_->readers->Acquire(why);
+  if (!reader) return false;
+  auto row = reader.get()->Prepare(std::string(kSelectKeyframes) + " WHERE id = ?",
+                                   "load keyframe " + std::to_string(id), why);
+  bool has_row = false;
+  if (!row || !row->Bind(1, std::int64_t{id}).Step(&has_row, why)) return false;
+  if (!has_row) {
+    *why = "unknown keyframe id " + std::to_string(id);
+    return false;
+  }
+  RawKeyframe raw;
+  if (!ReadKeyframeRow(*row, &raw, why) || !DecodeImages(&raw, why)) return false;
+  *keyframe = std::move(raw.keyframe);
+  return true;
+}
+
+}  // namespace objmap

@@ -1,0 +1,192 @@
+#include "store/store_schema.h"
+
+#include <vector>
+
+namespace objmap {
+namespace store_internal {
+namespace {
+
+// The schema of version 1. Comments stay in sqlite_master, so `sqlite3 map.db .schema` documents
+// the blob layouts (all little-endian).
+const char kSchemaSql[] = R"sql(
+CREATE TABLE meta(
+  key TEXT PRIMARY KEY NOT NULL,  -- map_version, next_object_id
+  value INTEGER NOT NULL
+);
+CREATE TABLE keyframes(
+  id INTEGER PRIMARY KEY,
+  stamp_s REAL NOT NULL,
+  name TEXT NOT NULL,
+  T_W_C BLOB NOT NULL,       -- 16 float64, column-major 4x4, camera to world
+  width INTEGER NOT NULL,    -- intrinsics, pixels
+  height INTEGER NOT NULL,
+  fx REAL NOT NULL,
+  fy REAL NOT NULL,
+  cx REAL NOT NULL,
+  cy REAL NOT NULL,
+  depth_png BLOB NOT NULL,   -- 16-bit PNG, millimetres (lossless)
+  mask_png BLOB NOT NULL,    -- 8-bit PNG, 1 where a pixel belongs to an object segment
+  color_jpeg BLOB,           -- NULL when the keyframe came without colour
+  detections BLOB NOT NULL   -- per detection: box (4 float32), class (int32), score (float32)
+);
+CREATE TABLE observations(
+  id INTEGER PRIMARY KEY,    -- insertion order
+  object_id INTEGER NOT NULL,
+  keyframe_id INTEGER NOT NULL REFERENCES keyframes(id),
+  box_x_min REAL NOT NULL,   -- detection box, colour pixels
+  box_y_min REAL NOT NULL,
+  box_x_max REAL NOT NULL,
+  box_y_max REAL NOT NULL,
+  class_scores BLOB NOT NULL,  -- per entry: class (int32) score (float32)
+  points BLOB NOT NULL,      -- segment in the camera frame: x y z (float32) per point
+  colors BLOB NOT NULL       -- r g b (uint8) per point, or empty
+);
+CREATE INDEX observations_by_object ON observations(object_id, keyframe_id);
+CREATE INDEX observations_by_keyframe ON observations(keyframe_id);
+CREATE TABLE objects(        -- derived summaries, for inspection
+  id INTEGER PRIMARY KEY,
+  class_id INTEGER NOT NULL,
+  confidence REAL NOT NULL,
+  centroid_x REAL NOT NULL,  -- world frame, metres
+  centroid_y REAL NOT NULL,
+  centroid_z REAL NOT NULL,
+  observations INTEGER NOT NULL
+);
+INSERT INTO meta(key, value) VALUES ('map_version', 0), ('next_object_id', 1);
+)sql";
+
+const char* const kTables[] = {"meta", "keyframes", "observations", "objects"};
+
+// "name type notnull pk" of each column of `table`, in order; empty when the table is missing.
+bool DescribeTable(Connection* db, const std::string& table, std::string* description,
+                   std::string* why) {
+  auto columns = db->Prepare("SELECT name, type, \"notnull\", pk FROM pragma_table_info(?)",
+                             "describe table " + table, why);
+  if (!columns) return false;
+  columns->Bind(1, table);
+  description->clear();
+  for (bool row = true;;) {
+    if (!columns->Step(&row, why)) return false;
+    if (!row) return true;
+    *description += columns->Text(0) + " " + columns->Text(1) + " " +
+                    std::to_string(columns->Int64(2)) + " " + std::to_string(columns->Int64(3)) +
+                    ", ";
+  }
+}
+
+// Compares the tables of `db` with those the schema creates (in a scratch in-memory database,
+// so the expected columns are never written down twice).
+bool CheckTables(Connection* db, std::string* why) {
+  std::string ignored;
+  auto expected = Connection::Open(":memory:", SQLITE_OPEN_READWRITE, 0, &ignored);
+  if (!expected || !expected->Exec(kSchemaSql, why)) return false;
+  for (const char* table : kTables) {
+    std::string want, have;
+    if (!DescribeTable(expected.get(), table, &want, why) ||
+        !DescribeTable(db, table, &have, why)) {
+      return false;
+    }
+    if (have.empty()) {
+      *why = std::string("not an objmap database: table ") + table + " is missing";
+      return false;
+    }
+    if (have != want) {
+      *why = std::string("not an objmap database: table ") + table + " has columns (" + have +
+             ") instead of (" + want + ")";
+      return false;
+    }
+  }
+  return true;
+}
+
+bool QuickCheck(Connection* db, std::string* why) {
+  auto check = db->Prepare("PRAGMA quick_check", "integrity check", why);
+  bool row = false;
+  if (!check || !check->Step(&row, why)) return false;
+  if (row && check->Text(0) == "ok") return true;
+  *why = "corrupt database (integrity check: " + (row ? check->Text(0) : "no answer") + ")";
+  return false;
+}
+
+// Creates the schema when the file is still empty. The emptiness is checked again inside the
+// write transaction: another process may have created it meanwhile.
+bool CreateIfEmpty(Connection* db, std::string* why) {
+  std::int64_t version = 0, tables = 0;
+  if (!db->Exec("BEGIN IMMEDIATE", why)) return false;
+  const bool ok =
+      db->QueryInt("PRAGMA user_version", &version, why) &&
+      db->QueryInt("SELECT count(*) FROM sqlite_master", &tables, why) &&
+      (version != 0 || tables != 0 ||
+       (db->Exec(kSchemaSql, why) &&
+        db->Exec("PRAGMA application_id = " + std::to_string(kApplicationId), why) &&
+        db->Exec("PRAGMA user_version = " + std::to_string(KeyframeStore::kSchemaVersion), why))) &&
+      db->Exec("COMMIT", why);
+  if (!ok) db->RollbackIfOpen();
+  return ok;
+}
+
+// Recognises what is in the file, creating the schema when it is empty.
+bool CheckOrCreate(Connection* db, std::string* why) {
+  std::int64_t version = 0, application = 0, tables = 0;
+  if (!db->QueryInt("PRAGMA user_version", &version, why) ||
+      !db->QueryInt("PRAGMA application_id", &application, why) ||
+      !db->QueryInt("SELECT count(*) FROM sqlite_master", &tables, why)) {
+    *why = "not a readable SQLite database (" + *why + ")";
+    return false;
+  }
+  if (version == 0 && tables == 0) {
+    if (!CreateIfEmpty(db, why)) return false;
+    return CheckOrCreate(db, why);
+  }
+  if (version == 0 || application != kApplicationId) {
+    *why = "not an objmap database (application_id " + std::to_string(application) +
+           ", user_version " + std::to_string(version) + ")";
+    return false;
+  }
+  if (version != KeyframeStore::kSchemaVersion) {
+    *why = "schema version " + std::to_string(version) +
+           (version > KeyframeStore::kSchemaVersion ? " is newer than" : " has no migration to") +
+           " this build's version " + std::to_string(KeyframeStore::kSchemaVersion);
+    return false;
+  }
+  return QuickCheck(db, why) && CheckTables(db, why);
+}
+
+// WAL lets readers run alongside the writer; in WAL mode synchronous=NORMAL already survives
+// a killed process (only power loss can take the last commits).
+bool Configure(Connection* db, const KeyframeStoreConfig& config, std::string* why) {
+  auto mode = db->Prepare("PRAGMA journal_mode = WAL", "set WAL journal mode", why);
+  bool row = false;
+  if (!mode || !mode->Step(&row, why)) return false;
+  if (!row || mode->Text(0) != "wal") {
+    *why = "cannot switch to WAL journal mode (journal mode " + mode->Text(0) + ")";
+    return false;
+  }
+  return db->Exec("PRAGMA synchronous = " + config.synchronous, why) &&
+         db->Exec("PRAGMA foreign_keys = ON", why);
+}
+
+}  // namespace
+
+std::unique_ptr<Connection> OpenWriter(const std::string& path, const KeyframeStoreConfig& config,
+                                       std::string* why) {
+  auto db = Connection::Open(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_NOMUTEX,
+                             config.busy_timeout_ms, why);
+  if (!db) return nullptr;
+  if (!CheckOrCreate(db.get(), why) || !Configure(db.get(), config, why)) {
+    *why = path + ": " + *why;
+    return nullptr;
+  }
+  return db;
+}
+
+std::unique_ptr<Connection> OpenReader(const std::string& path, int busy_timeout_ms,
+                                       std::string* why) {
+  auto db =
+      Connection::Open(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_NOMUTEX, busy_timeout_ms, why);
+  if (!db || !db->Exec("PRAGMA query_only = ON", why)) return nullptr;
+  return db;
+}
+
+}  // namespace store_internal
+}  // namespace objmap

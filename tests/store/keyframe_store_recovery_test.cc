@@ -1,0 +1,178 @@
+// What Open does with files that are not (intact, known) objmap databases, and durability of
+// acknowledged commits when the writing process is killed.
+
+#include <signal.h>
+#include <sqlite3.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <fstream>
+#include <random>
+
+#include "store/keyframe_store.h"
+#include "store_test_data.h"
+
+namespace objmap {
+namespace {
+
+using testing::ExpectSameKeyframe;
+using testing::MakeKeyframe;
+using testing::MakeObservation;
+
+class KeyframeStoreRecoveryTest : public testing::StoreTest {
+ protected:
+  // A closed store with `n` keyframes (closing checkpoints the WAL into the file).
+  void CreateStore(const std::string& path, int n) {
+    auto store = OpenStore(path);
+    ASSERT_NE(store, nullptr);
+    for (int i = 1; i <= n; ++i) {
+      StoreChange change;
+      change.keyframe = MakeKeyframe(i);
+      change.observations = {MakeObservation(i, i, 50)};
+      std::string why;
+      ASSERT_TRUE(store->Commit(change, &why)) << why;
+    }
+  }
+
+  // Runs SQL on the file directly, as another program would.
+  void RunSql(const std::string& path, const std::string& sql) {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+    char* message = nullptr;
+    EXPECT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &message), SQLITE_OK)
+        << (message != nullptr ? message : "");
+    sqlite3_free(message);
+    sqlite3_close(db);
+  }
+
+  // Open must fail with a reason that names the file and contains `expected`.
+  void ExpectOpenFails(const std::string& path, const std::string& expected) {
+    std::string why;
+    EXPECT_EQ(KeyframeStore::Open(path, KeyframeStoreConfig{}, &why), nullptr);
+    EXPECT_NE(why.find(path), std::string::npos) << why;
+    EXPECT_NE(why.find(expected), std::string::npos) << why;
+  }
+
+  // Overwrites `bytes` bytes at `offset` with pseudo-random garbage.
+  void WriteGarbage(const std::string& path, std::size_t offset, std::size_t bytes) {
+    std::fstream file(path, std::ios::in | std::ios::out | std::ios::binary);
+    ASSERT_TRUE(file.good());
+    std::mt19937 random(7);
+    std::string garbage(bytes, '\0');
+    for (char& c : garbage) c = static_cast<char>(random());
+    file.seekp(static_cast<std::streamoff>(offset));
+    file.write(garbage.data(), static_cast<std::streamsize>(garbage.size()));
+  }
+};
+
+TEST_F(KeyframeStoreRecoveryTest, RejectsATextFile) {
+  std::ofstream(Path("notes.db")) << "These are not the keyframes you are looking for.\n";
+  ExpectOpenFails(Path("notes.db"), "not a readable SQLite database");
+}
+
+TEST_F(KeyframeStoreRecoveryTest, RejectsADatabaseWithOverwrittenHeader) {
+  CreateStore(Path(), 3);
+  WriteGarbage(Path(), 0, 4096);
+  ExpectOpenFails(Path(), "not a readable SQLite database");
+}
+
+TEST_F(KeyframeStoreRecoveryTest, RejectsADatabaseWithCorruptPages) {
+  CreateStore(Path(), 20);
+  const auto size = std::filesystem::file_size(Path());
+  ASSERT_GT(size, 16 * 4096u);
+  // Keep the header and schema page, destroy the table pages.
+  WriteGarbage(Path(), 4096, size - 2 * 4096);
+  ExpectOpenFails(Path(), "corrupt database");
+}
+
+TEST_F(KeyframeStoreRecoveryTest, RejectsANewerSchemaVersion) {
+  CreateStore(Path(), 1);
+  RunSql(Path(), "PRAGMA user_version = " + std::to_string(KeyframeStore::kSchemaVersion + 1));
+  ExpectOpenFails(Path(), "is newer than this build's version");
+}
+
+TEST_F(KeyframeStoreRecoveryTest, RejectsDatabasesOfOtherApplications) {
+  RunSql(Path("versioned.db"), "CREATE TABLE songs(title TEXT); PRAGMA user_version = 1;");
+  ExpectOpenFails(Path("versioned.db"), "not an objmap database");
+  RunSql(Path("plain.db"), "CREATE TABLE keyframes(id INTEGER PRIMARY KEY);");
+  ExpectOpenFails(Path("plain.db"), "not an objmap database");
+  // Even with objmap's application id and version, the tables must be the expected ones.
+  CreateStore(Path(), 1);
+  RunSql(Path(), "DROP TABLE objects;");
+  ExpectOpenFails(Path(), "table objects is missing");
+  CreateStore(Path("altered.db"), 1);
+  RunSql(Path("altered.db"), "ALTER TABLE observations ADD COLUMN note TEXT;");
+  ExpectOpenFails(Path("altered.db"), "table observations has columns");
+}
+
+TEST_F(KeyframeStoreRecoveryTest, RejectsPathsThatAreNotFilesAndBadConfigs) {
+  ExpectOpenFails(dir_.string(), "cannot open");
+  std::string why;
+  EXPECT_EQ(KeyframeStore::Open(":memory:", KeyframeStoreConfig{}, &why), nullptr);
+  KeyframeStoreConfig config;
+  config.synchronous = "EVENTUALLY";
+  EXPECT_EQ(KeyframeStore::Open(Path(), config, &why), nullptr);
+  EXPECT_NE(why.find("synchronous"), std::string::npos) << why;
+  EXPECT_FALSE(std::filesystem::exists(Path()));
+}
+
+// Child process: commits keyframes 1..kTotal, writing the number acknowledged so far to `fd`
+// after each Commit returned true; then waits to be killed. Exits 2 or 3 on failure.
+[[noreturn]] void CommitUntilKilled(const std::string& path, int fd, int total) {
+  std::string why;
+  auto store = KeyframeStore::Open(path, KeyframeStoreConfig{}, &why);
+  if (!store) _exit(2);
+  for (int i = 1; i <= total; ++i) {
+    StoreChange change;
+    change.keyframe = MakeKeyframe(i);
+    change.observations = {MakeObservation(i % 5 + 1, i, 30)};
+    change.map_version = i;
+    if (!store->Commit(change, &why)) _exit(3);
+    const std::int32_t acknowledged = i;
+    if (write(fd, &acknowledged, sizeof(acknowledged)) != sizeof(acknowledged)) _exit(3);
+  }
+  for (;;) pause();
+}
+
+TEST_F(KeyframeStoreRecoveryTest, AcknowledgedCommitsSurviveAKilledWriter) {
+  constexpr int kTotal = 3000, kKillAfter = 100;
+  int fds[2];
+  ASSERT_EQ(pipe(fds), 0);
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    close(fds[0]);
+    CommitUntilKilled(Path(), fds[1], kTotal);
+  }
+  close(fds[1]);
+  std::int32_t acknowledged = 0, count = 0;
+  while (acknowledged < kKillAfter && read(fds[0], &count, sizeof(count)) == sizeof(count)) {
+    acknowledged = count;
+  }
+  kill(child, SIGKILL);
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "child exited with " << WEXITSTATUS(status);
+  // Whatever the child acknowledged before it died is still in the pipe.
+  while (read(fds[0], &count, sizeof(count)) == sizeof(count)) acknowledged = count;
+  close(fds[0]);
+  ASSERT_GE(acknowledged, kKillAfter);
+  EXPECT_LT(acknowledged, kTotal) << "the child finished before it was killed";
+
+  auto store = OpenStore(Path());
+  ASSERT_NE(store, nullptr);
+  StoredMap map;
+  std::string why;
+  ASSERT_TRUE(store->LoadAll(&map, &why)) << why;
+  // Every acknowledged commit is there; at most the one in flight may have landed too.
+  ASSERT_GE(map.keyframes.size(), static_cast<std::size_t>(acknowledged));
+  ASSERT_LE(map.keyframes.size(), static_cast<std::size_t>(acknowledged) + 1);
+  EXPECT_EQ(map.map_version, map.keyframes.size());
+  EXPECT_EQ(map.observations.size(), map.keyframes.size());
+  for (std::size_t i = 0; i < map.keyframes.size(); ++i) {
+    ExpectSameKeyframe(MakeKeyframe(static_cast<KeyframeId>(i + 1)), map.keyframes[i], 3.0);
+  }
+}
+
+}  // namespace
+}  // namespace objmap

@@ -1,0 +1,280 @@
+// Round trips through the store and the all-or-nothing semantics of Commit.
+
+#include "store/keyframe_store.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <thread>
+
+#include "store_test_data.h"
+
+namespace objmap {
+namespace {
+
+using testing::ExpectSameKeyframe;
+using testing::ExpectSameMap;
+using testing::ExpectSameObservation;
+using testing::MakeKeyframe;
+using testing::MakeObservation;
+
+class KeyframeStoreTest : public testing::StoreTest {
+ protected:
+  // Three keyframes (the third without colour), observations of objects 1 and 2 inserted out of
+  // (object, keyframe) order, two summaries and the metadata.
+  void CommitSmallMap(KeyframeStore* store) {
+    std::string why;
+    StoreChange first;
+    first.keyframe = MakeKeyframe(1);
+    first.observations = {MakeObservation(2, 1, 5), MakeObservation(1, 1, 7),
+                          MakeObservation(1, 1, 3, /*colored=*/false)};
+    first.map_version = 1;
+    first.next_object_id = 3;
+    ASSERT_TRUE(store->Commit(first, &why)) << why;
+    StoreChange second;
+    second.keyframe = MakeKeyframe(2);
+    second.observations = {MakeObservation(1, 2, 4), MakeObservation(2, 2, 0)};
+    second.object_summaries = {{1, 41, 0.75f, {0.5f, -1.f, 2.25f}, 3},
+                               {2, 2, 0.5f, {0.f, 0.f, 1.f}, 2}};
+    second.map_version = 2;
+    ASSERT_TRUE(store->Commit(second, &why)) << why;
+    StoreChange third;
+    third.keyframe = MakeKeyframe(3, /*with_color=*/false);
+    third.map_version = 3;
+    ASSERT_TRUE(store->Commit(third, &why)) << why;
+  }
+
+  StoredMap Load(const KeyframeStore& store) {
+    StoredMap map;
+    std::string why;
+    EXPECT_TRUE(store.LoadAll(&map, &why)) << why;
+    return map;
+  }
+};
+
+TEST(KeyframeStoreConfig, IsValidNamesTheBadField) {
+  std::string why;
+  EXPECT_TRUE(KeyframeStoreConfig{}.IsValid(&why)) << why;
+  KeyframeStoreConfig config;
+  config.color_jpeg_quality = 0;
+  EXPECT_FALSE(config.IsValid(&why));
+  EXPECT_NE(why.find("color_jpeg_quality"), std::string::npos) << why;
+  config = {};
+  config.color_jpeg_quality = 101;
+  EXPECT_FALSE(config.IsValid(&why));
+  config = {};
+  config.busy_timeout_ms = -1;
+  EXPECT_FALSE(config.IsValid(&why));
+  EXPECT_NE(why.find("busy_timeout_ms"), std::string::npos) << why;
+  config = {};
+  config.synchronous = "SOMETIMES";
+  EXPECT_FALSE(config.IsValid(&why));
+  EXPECT_NE(why.find("synchronous"), std::string::npos) << why;
+  config.synchronous = "FULL";
+  EXPECT_TRUE(config.IsValid(&why)) << why;
+}
+
+TEST_F(KeyframeStoreTest, RoundTripsKeyframesObservationsSummariesAndMeta) {
+  auto store = OpenStore(Path());
+  ASSERT_NE(store, nullptr);
+  EXPECT_EQ(store->path(), Path());
+  StoredMap empty = Load(*store);
+  EXPECT_TRUE(empty.keyframes.empty());
+  EXPECT_EQ(empty.map_version, 0u);
+  EXPECT_EQ(empty.next_object_id, 1);
+  CommitSmallMap(store.get());
+  EXPECT_EQ(store->NumKeyframes(), 3u);
+
+  const StoredMap map = Load(*store);
+  EXPECT_EQ(map.map_version, 3u);
+  EXPECT_EQ(map.next_object_id, 3);
+  ASSERT_EQ(map.keyframes.size(), 3u);
+  for (int i = 0; i < 3; ++i) ExpectSameKeyframe(MakeKeyframe(i + 1, i < 2), map.keyframes[i], 3.0);
+  EXPECT_TRUE(map.keyframes[2].color.empty());
+
+  // Ascending (object, keyframe, insertion).
+  const std::vector<StoredObservation> expected = {
+      MakeObservation(1, 1, 7), MakeObservation(1, 1, 3, false), MakeObservation(1, 2, 4),
+      MakeObservation(2, 1, 5), MakeObservation(2, 2, 0)};
+  ASSERT_EQ(map.observations.size(), expected.size());
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    ExpectSameObservation(expected[i], map.observations[i]);
+  }
+  ASSERT_EQ(map.objects.size(), 2u);
+  EXPECT_EQ(map.objects[0].id, 1);
+  EXPECT_EQ(map.objects[0].class_id, 41);
+  EXPECT_EQ(map.objects[0].confidence, 0.75f);
+  EXPECT_EQ(map.objects[0].centroid_W, Eigen::Vector3f(0.5f, -1.f, 2.25f));
+  EXPECT_EQ(map.objects[0].observations, 3);
+  EXPECT_EQ(map.objects[1].id, 2);
+
+  StoredKeyframe one;
+  std::string why;
+  ASSERT_TRUE(store->LoadKeyframe(2, &one, &why)) << why;
+  ExpectSameKeyframe(map.keyframes[1], one, 0.0);
+  EXPECT_FALSE(store->LoadKeyframe(42, &one, &why));
+  EXPECT_EQ(why, "unknown keyframe id 42");
+}
+
+TEST_F(KeyframeStoreTest, ReopeningFindsTheSameMap) {
+  StoredMap before;
+  {
+    auto store = OpenStore(Path());
+    ASSERT_NE(store, nullptr);
+    CommitSmallMap(store.get());
+    before = Load(*store);
+  }
+  auto store = OpenStore(Path());
+  ASSERT_NE(store, nullptr);
+  EXPECT_EQ(store->NumKeyframes(), 3u);
+  ExpectSameMap(before, Load(*store));
+}
+
+TEST_F(KeyframeStoreTest, MergesMoveObservationsAndRemovalsDeleteThem) {
+  auto store = OpenStore(Path());
+  ASSERT_NE(store, nullptr);
+  CommitSmallMap(store.get());
+  StoreChange change;
+  change.keyframe = MakeKeyframe(4);
+  change.observations = {MakeObservation(5, 4, 2), MakeObservation(2, 4, 6)};
+  change.merged = {{1, 2}};  // object 2's observations, the new one included, go to object 1
+  change.removed_objects = {5};
+  change.object_summaries = {{1, 41, 0.9f, {1.f, 2.f, 3.f}, 6}};
+  std::string why;
+  ASSERT_TRUE(store->Commit(change, &why)) << why;
+
+  const StoredMap map = Load(*store);
+  // Within a keyframe, insertion order: object 2's observation in keyframe 1 came first.
+  std::vector<StoredObservation> expected = {
+      MakeObservation(2, 1, 5), MakeObservation(1, 1, 7), MakeObservation(1, 1, 3, false),
+      MakeObservation(1, 2, 4), MakeObservation(2, 2, 0), MakeObservation(2, 4, 6)};
+  for (StoredObservation& o : expected) o.object_id = 1;
+  ASSERT_EQ(map.observations.size(), expected.size());
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    ExpectSameObservation(expected[i], map.observations[i]);
+  }
+  ASSERT_EQ(map.objects.size(), 1u);
+  EXPECT_EQ(map.objects[0].id, 1);
+  EXPECT_EQ(map.objects[0].observations, 6);
+  EXPECT_EQ(map.keyframes.size(), 4u);
+}
+
+TEST_F(KeyframeStoreTest, PoseUpdatesAreExact) {
+  auto store = OpenStore(Path());
+  ASSERT_NE(store, nullptr);
+  CommitSmallMap(store.get());
+  StoreChange change;
+  const Eigen::Isometry3d T_W_C1 = MakeKeyframe(17).T_W_C, T_W_C3 = MakeKeyframe(29).T_W_C;
+  change.poses = {{1, T_W_C1}, {3, T_W_C3}};
+  change.map_version = 7;
+  std::string why;
+  ASSERT_TRUE(store->Commit(change, &why)) << why;
+  const StoredMap map = Load(*store);
+  EXPECT_EQ(map.keyframes[0].T_W_C.matrix(), T_W_C1.matrix());
+  EXPECT_EQ(map.keyframes[1].T_W_C.matrix(), MakeKeyframe(2).T_W_C.matrix());
+  EXPECT_EQ(map.keyframes[2].T_W_C.matrix(), T_W_C3.matrix());
+  EXPECT_EQ(map.map_version, 7u);
+  EXPECT_EQ(map.next_object_id, 3);  // absent in the change: unchanged
+}
+
+TEST_F(KeyframeStoreTest, FailedCommitsLeaveTheDatabaseUnchanged) {
+  auto store = OpenStore(Path());
+  ASSERT_NE(store, nullptr);
+  CommitSmallMap(store.get());
+  const StoredMap before = Load(*store);
+  // Each change does real work before the statement that fails.
+  auto change_with = [](auto edit) {
+    StoreChange change;
+    change.keyframe = MakeKeyframe(9);
+    change.observations = {MakeObservation(1, 9, 3)};
+    change.merged = {{1, 2}};
+    change.removed_objects = {1};
+    change.poses = {{2, MakeKeyframe(5).T_W_C}};
+    change.map_version = 99;
+    change.next_object_id = 50;
+    edit(&change);
+    return change;
+  };
+  const std::vector<std::pair<StoreChange, std::string>> failing = {
+      {change_with([](StoreChange* c) { c->poses[404] = Eigen::Isometry3d::Identity(); }),
+       "unknown keyframe id 404"},
+      {change_with([](StoreChange* c) { c->keyframe = MakeKeyframe(2); }),
+       "keyframe id 2 already exists"},
+      {change_with([](StoreChange* c) { c->observations.push_back(MakeObservation(3, 77, 1)); }),
+       "unknown keyframe id 77"},
+      {change_with([](StoreChange* c) { c->keyframe->depth_mm.pop_back(); }), "depth_mm"},
+      {change_with([](StoreChange* c) { c->keyframe->object_mask.clear(); }), "object_mask"},
+      {change_with([](StoreChange* c) { c->keyframe->color.width = 10; }), "color"},
+      {change_with(
+           [](StoreChange* c) { c->observations[0].observation.segment_C.colors.pop_back(); }),
+       "colors"},
+  };
+  for (const auto& [change, expected_reason] : failing) {
+    std::string why;
+    EXPECT_FALSE(store->Commit(change, &why));
+    EXPECT_NE(why.find(expected_reason), std::string::npos) << why;
+  }
+  ExpectSameMap(before, Load(*store));
+  // The store still takes changes afterwards.
+  std::string why;
+  EXPECT_TRUE(store->Commit(change_with([](StoreChange*) {}), &why)) << why;
+  EXPECT_EQ(store->NumKeyframes(), 4u);
+}
+
+TEST_F(KeyframeStoreTest, BytesOfCountsTheStoredBlobs) {
+  auto store = OpenStore(Path());
+  ASSERT_NE(store, nullptr);
+  CommitSmallMap(store.get());
+  const KeyframeStore::KeyframeBytes one = store->BytesOf(1);
+  EXPECT_GT(one.depth, 0u);
+  EXPECT_GT(one.mask, 0u);
+  EXPECT_GT(one.color, 0u);
+  // Keyframe 1: 7 + 3 + 5 points (xyz float32), 7 + 5 colours (rgb), 3 x 2 class scores.
+  EXPECT_EQ(one.observations, 15u * 12 + 12 * 3 + 3 * 2 * 8);
+  // Plus the pose (16 doubles) and two detections (24 bytes each).
+  EXPECT_EQ(one.total, one.depth + one.mask + one.color + one.observations + 128 + 48);
+  EXPECT_EQ(store->BytesOf(3).color, 0u);
+  EXPECT_EQ(store->BytesOf(3).observations, 0u);
+  EXPECT_EQ(store->BytesOf(12345).total, 0u);
+  EXPECT_GE(store->FileBytes(), one.total + store->BytesOf(2).total + store->BytesOf(3).total);
+}
+
+TEST_F(KeyframeStoreTest, ReadersRunAlongsideCommits) {
+  auto store = OpenStore(Path());
+  ASSERT_NE(store, nullptr);
+  constexpr int kKeyframes = 40;
+  std::atomic<bool> done{false};
+  std::atomic<int> failures{0};
+  std::vector<std::thread> readers;
+  for (int r = 0; r < 3; ++r) {
+    readers.emplace_back([&] {
+      std::size_t seen = 0;
+      while (!done) {
+        const std::size_t n = store->NumKeyframes();
+        StoredKeyframe k;
+        std::string why;
+        if (n < seen || (n > 0 && !store->LoadKeyframe(static_cast<KeyframeId>(n), &k, &why))) {
+          ++failures;
+        }
+        seen = n;
+      }
+    });
+  }
+  for (int i = 1; i <= kKeyframes; ++i) {
+    StoreChange change;
+    change.keyframe = MakeKeyframe(i);
+    change.observations = {MakeObservation(i, i, 20)};
+    std::string why;
+    ASSERT_TRUE(store->Commit(change, &why)) << why;
+  }
+  done = true;
+  for (std::thread& reader : readers) reader.join();
+  EXPECT_EQ(failures, 0);
+  const StoredMap map = Load(*store);
+  ASSERT_EQ(map.keyframes.size(), static_cast<std::size_t>(kKeyframes));
+  for (int i = 0; i < kKeyframes; ++i)
+    ExpectSameKeyframe(MakeKeyframe(i + 1), map.keyframes[i], 3.0);
+}
+
+}  // namespace
+}  // namespace objmap
