@@ -1,11 +1,35 @@
 #pragma once
+// Every `objmap` command takes the words after its name and returns the process exit code.
 
 namespace objmap::cli {
 
-/// `objmap map <dataset> --out <dir>`; returns the process exit code.
+/// `objmap map <dataset> --out <dir>`: maps a recorded sequence locally.
 int RunMapCommand(int argc, char** argv);
 
-/// `objmap segment <organized.pcd> --out <labelled.pcd>`; returns the process exit code.
+/// `objmap segment <organized.pcd> --out <labelled.pcd>`: segments one cloud locally.
 int RunSegmentCommand(int argc, char** argv);
+
+// Commands that talk to a running objmap_server (built with OBJMAP_WITH_GRPC).
+
+/// `objmap ingest <dataset>`: streams the keyframes of a recorded sequence to the server.
+int RunIngestCommand(int argc, char** argv);
+
+/// `objmap inventory`: objects per class.
+int RunInventoryCommand(int argc, char** argv);
+
+/// `objmap objects`: objects by class, region, confidence, distance.
+int RunObjectsCommand(int argc, char** argv);
+
+/// `objmap free X0 Y0 Z0 X1 Y1 Z1`: exit code 0 when the box is free, 3 when it is not.
+int RunFreeCommand(int argc, char** argv);
+
+/// `objmap export --octomap f.bt --objects dir/`: the OctoMap and the object models as files.
+int RunExportCommand(int argc, char** argv);
+
+/// `objmap update-poses poses.txt`: corrected keyframe poses from a pose-graph back end.
+int RunUpdatePosesCommand(int argc, char** argv);
+
+/// `objmap status`: map version, counts, queue, regeneration, database.
+int RunStatusCommand(int argc, char** argv);
 
 }  // namespace objmap::cli

@@ -1,16 +1,48 @@
 // objmap: object-oriented semantic mapping from the command line.
 #include <cstring>
 #include <iostream>
+#include <map>
+#include <string>
 
 #include "commands.h"
 
 namespace {
 
+using Command = int (*)(int, char**);
+
 void PrintUsage() {
-  std::cerr << "usage:\n"
-               "  objmap map <dataset> --out <dir> [options]   map an RGB-D sequence\n"
-               "  objmap segment <organized.pcd> --out <labelled.pcd>   segment one cloud\n"
-               "run `objmap <command> --help` for the options of a command\n";
+  std::cerr
+      << "usage:\n"
+         "  objmap map <dataset> --out <dir> [options]   map an RGB-D sequence\n"
+         "  objmap segment <organized.pcd> --out <labelled.pcd>   segment one cloud\n"
+#ifdef OBJMAP_CLI_WITH_SERVER
+         "commands for a running objmap_server (--server ADDR, default 127.0.0.1:50051):\n"
+         "  objmap ingest <dataset>                      stream a sequence's keyframes\n"
+         "  objmap inventory [--since VERSION] [--json]  objects per class\n"
+         "  objmap objects [--class NAME] [--region X0 Y0 Z0 X1 Y1 Z1] [--near X Y Z] [--json]\n"
+         "  objmap free X0 Y0 Z0 X1 Y1 Z1                exit code 0 when free, 3 when not\n"
+         "  objmap export --octomap f.bt --objects dir/  OctoMap and object models as files\n"
+         "  objmap update-poses <poses.txt> [--wait]     corrected keyframe poses\n"
+         "  objmap status                                map version, counts, queue\n"
+#endif
+         "run `objmap <command> --help` for the options of a command\n";
+}
+
+const std::map<std::string, Command>& Commands() {
+  static const std::map<std::string, Command> commands = {
+      {"map", objmap::cli::RunMapCommand},
+      {"segment", objmap::cli::RunSegmentCommand},
+#ifdef OBJMAP_CLI_WITH_SERVER
+      {"ingest", objmap::cli::RunIngestCommand},
+      {"inventory", objmap::cli::RunInventoryCommand},
+      {"objects", objmap::cli::RunObjectsCommand},
+      {"free", objmap::cli::RunFreeCommand},
+      {"export", objmap::cli::RunExportCommand},
+      {"update-poses", objmap::cli::RunUpdatePosesCommand},
+      {"status", objmap::cli::RunStatusCommand},
+#endif
+  };
+  return commands;
 }
 
 }  // namespace
@@ -21,9 +53,13 @@ int main(int argc, char** argv) {
     return argc < 2 ? 2 : 0;
   }
   const std::string command = argv[1];
-  if (command == "map") return objmap::cli::RunMapCommand(argc - 2, argv + 2);
-  if (command == "segment") return objmap::cli::RunSegmentCommand(argc - 2, argv + 2);
-  std::cerr << "objmap: unknown command '" << command << "'\n";
+  const auto it = Commands().find(command);
+  if (it != Commands().end()) return it->second(argc - 2, argv + 2);
+  std::cerr << "objmap: unknown command '" << command << "'";
+#ifndef OBJMAP_CLI_WITH_SERVER
+  std::cerr << " (this build has no server commands: configure with OBJMAP_WITH_GRPC=ON)";
+#endif
+  std::cerr << "\n";
   PrintUsage();
   return 2;
 }

@@ -13,6 +13,7 @@
 #include "detection/detections_file.h"
 #include "mapper/map_export.h"
 #include "pipeline/sequence_runner.h"
+#include "progress_bar.h"
 #include "types/coco_classes.h"
 
 namespace objmap::cli {
@@ -72,26 +73,6 @@ std::unique_ptr<Detector> MakeDetector(Arguments& args, std::string* why) {
   }
   return MakeCenterNetDetector(config, why);
 }
-
-// A progress bar on stderr, redrawn only when it or the keyframe count changes so that a log
-// file stays short.
-class ProgressBar {
- public:
-  void Update(std::size_t done, std::size_t total, std::size_t keyframes) {
-    constexpr int kWidth = 40;
-    const int filled = static_cast<int>(kWidth * done / std::max<std::size_t>(total, 1));
-    if (filled == last_filled_ && keyframes == last_keyframes_ && done != total) return;
-    last_filled_ = filled;
-    last_keyframes_ = keyframes;
-    std::fprintf(stderr, "\r[%s%s] %zu/%zu frames, %zu keyframes", std::string(filled, '#').c_str(),
-                 std::string(kWidth - filled, '.').c_str(), done, total, keyframes);
-    if (done == total) std::fprintf(stderr, "\n");
-  }
-
- private:
-  int last_filled_ = -1;
-  std::size_t last_keyframes_ = 0;
-};
 
 struct StageMedians {
   double detection_ms, segmentation_ms, association_ms, occupancy_ms, total_ms;

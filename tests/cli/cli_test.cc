@@ -1,8 +1,6 @@
 // Runs the `objmap` executable on a small rendered 7-Scenes folder, as a user would.
 #include <gtest/gtest.h>
 
-#include <array>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -10,6 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
+#include "run_objmap.h"
 #include "test_data.h"
 #include "test_scenes.h"
 #include "types/coco_classes.h"
@@ -18,26 +17,9 @@ namespace objmap {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::CommandResult;
+using testing::RunObjmap;
 using testing::SceneBox;
-
-struct CommandResult {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr together
-};
-
-CommandResult RunObjmap(const std::string& arguments) {
-  const std::string command = std::string(OBJMAP_CLI_PATH) + " " + arguments + " 2>&1";
-  CommandResult result;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) return result;
-  std::array<char, 4096> buffer;
-  size_t n;
-  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0)
-    result.output.append(buffer.data(), n);
-  const int status = pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
 
 std::string PoseText(const Eigen::Isometry3d& T) {
   std::ostringstream text;
@@ -161,7 +143,9 @@ TEST_F(CliScene, EmptyOrMissingInputIsAClearError) {
 TEST(CliSegment, WritesOneLabelPerPoint) {
   const std::string cloud = testing::SharedDataPath("mosd-learn/learn0.pcd");
   OBJMAP_REQUIRE_PATH(cloud);
-  const std::string out = (fs::temp_directory_path() / ("objmap_cli_segment_" + std::to_string(::getpid()) + ".pcd")).string();
+  const std::string out =
+      (fs::temp_directory_path() / ("objmap_cli_segment_" + std::to_string(::getpid()) + ".pcd"))
+          .string();
   const CommandResult run = RunObjmap("segment " + cloud + " --out " + out);
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_NE(run.output.find("640x480"), std::string::npos) << run.output;
