@@ -9,12 +9,12 @@
 
 #include "occupancy/batch_octree.h"
 #include "occupancy/free_space_grid.h"
+#include "occupancy/occupancy_map_impl.h"
 
 namespace objmap {
 namespace {
 
 using occupancy_internal::BatchOcTree;
-using occupancy_internal::FreeSpaceGrid;
 using occupancy_internal::PackKey;
 using occupancy_internal::PointToKey;
 using occupancy_internal::UnpackKey;
@@ -70,29 +70,6 @@ bool OccupancyConfig::IsValid(std::string* why) const {
   if (object_margin_voxels < 0) return fail("object_margin_voxels must be >= 0");
   return true;
 }
-
-struct OccupancyMap::Impl {
-  explicit Impl(const OccupancyConfig& c) : config(c), tree(c.resolution_m), grid(c.resolution_m) {
-    tree.setProbHit(c.probability_hit);
-    tree.setProbMiss(c.probability_miss);
-    tree.setClampingThresMin(c.clamping_min);
-    tree.setClampingThresMax(c.clamping_max);
-  }
-
-  void CollectRays(const ScanW& scan);
-  void KeepOneRayPerEndVoxel();
-  void CastRays(const Eigen::Vector3f& origin, const VoxelKey& origin_key);
-  void ApplyOccupied();
-
-  OccupancyConfig config;
-  BatchOcTree tree;
-  FreeSpaceGrid grid;
-  IntegrationStats stats;
-  // Scratch, kept between scans to avoid reallocations.
-  std::vector<Eigen::Vector3f> ray_ends_W;
-  std::vector<std::uint64_t> occupied_keys;
-  VoxelKey min_key{}, max_key{};
-};
 
 // Turns the scan's points into free-space ray ends and occupied endpoint keys, and the key box.
 void OccupancyMap::Impl::CollectRays(const ScanW& scan) {

@@ -68,7 +68,7 @@ struct RegionOccupancy {
   bool truncated = false;         ///< more known cells than the limit
 };
 
-/// First voxel a ray meets.
+/// First voxel a ray meets (see OccupancyMap::CastRay).
 struct RayHit {
   bool hit = false;
   VoxelState state = VoxelState::kUnknown;  ///< kOccupied, or kUnknown when unknown stops rays
@@ -93,23 +93,35 @@ class OccupancyMap {
   [[nodiscard]] VoxelState Query(const Eigen::Vector3d& point_W) const;
   [[nodiscard]] OccupancyCounts Counts() const;
 
-  /// Occupied / free / unknown cells of the box [min_W, max_W] at `resolution_m` (0: the map
-  /// resolution; otherwise rounded up to leaf * 2^k, at most 2^15 leaves). A coarse cell is
-  /// occupied when any leaf in it is, free when known and not occupied (OctoMap inner-node
-  /// semantics: max child occupancy). Lists known cells when `max_cells` > 0. The caller
-  /// validates min <= max.
+  /// Occupied / free / unknown cells of the box [min_W, max_W] at `resolution_m` (0 or at most
+  /// the leaf: the map resolution; otherwise rounded up to leaf * 2^k, at most 2^15 leaves).
+  /// Cells are the OcTree's nodes at that size (aligned with its grid); every cell the closed box
+  /// touches counts, so a point-like box counts one cell, and occupied + free + unknown is the
+  /// number of such cells. A coarse cell is occupied when any leaf in it is, free when known and
+  /// not occupied (OctoMap inner-node semantics: max child occupancy), unknown otherwise. Lists
+  /// known cells (in tree order) when `max_cells` > 0, at most `max_cells`, with `truncated` set
+  /// when there were more. The box is clipped to the map's key range (+-32768 leaves); a box
+  /// that is empty after that (or non-finite, or min > max) counts no cells. Costs the known
+  /// nodes inside the box, not its volume.
   [[nodiscard]] RegionOccupancy QueryRegion(const Eigen::Vector3d& min_W,
                                             const Eigen::Vector3d& max_W, double resolution_m,
                                             std::size_t max_cells) const;
 
-  /// Casts a ray from `origin_W` along `direction_W` (non-zero, need not be unit) up to
-  /// `max_range_m`; returns the first occupied voxel, or the first unknown one when
-  /// `unknown_stops`.
+  /// Casts a ray from `origin_W` along `direction_W` (non-zero, need not be unit) through the
+  /// leaf voxels it enters within `max_range_m` (<= 0 or infinite: until it leaves the map);
+  /// returns the first occupied voxel, or the first unknown one when `unknown_stops`. The
+  /// origin's own voxel is checked first, whatever the range: an origin inside an occupied (or,
+  /// with `unknown_stops`, unknown) voxel is a hit at the distance to that voxel's centre, at most
+  /// half a voxel diagonal. distance_m is to the voxel centre, so a hit near the end of the range
+  /// may lie up to half a diagonal beyond `max_range_m`. No hit: `hit` false (also for a zero or
+  /// non-finite direction, or an origin outside the map).
   [[nodiscard]] RayHit CastRay(const Eigen::Vector3d& origin_W, const Eigen::Vector3d& direction_W,
                                double max_range_m, bool unknown_stops) const;
 
   /// The map, or the part of it whose leaves intersect [min_W, max_W] when `region` is true, as
-  /// the bytes of a standard OctoMap binary file (.bt) at the map resolution.
+  /// the bytes of a standard OctoMap binary file (.bt) at the map resolution. A pruned leaf
+  /// larger than a voxel that touches the box is written whole. `leaf_count` (may be null): the
+  /// leaves written.
   [[nodiscard]] std::string BinaryBytes(bool region, const Eigen::Vector3d& min_W,
                                         const Eigen::Vector3d& max_W,
                                         std::size_t* leaf_count) const;
