@@ -1,0 +1,134 @@
+// objmap_server: MapServer behind gRPC. Prints one "objmap_server listening on ..." line to
+// stdout once it serves (scripts and tests wait for it), everything else to stderr.
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "detection/centernet_detector.h"
+#include "grpc_service/grpc_server.h"
+#include "grpc_service/map_service.h"
+#include "map_server/map_server.h"
+#include "server_config.h"
+#include "server_options.h"
+
+namespace objmap {
+namespace {
+
+// Connections get this long to finish their calls after SIGINT/SIGTERM; then they are cancelled.
+constexpr std::chrono::seconds kShutdownGrace{5};
+
+// The configuration: the build's defaults, then the file, then the command line.
+bool LoadConfig(const ServerOptions& options, ServerConfig* config, std::string* why) {
+  config->detector.model_path = OBJMAP_DEFAULT_MODEL_PATH;
+  if (!options.config_path.empty() && !LoadServerConfig(options.config_path, config, why)) {
+    return false;
+  }
+  if (!options.model_path.empty()) config->detector.model_path = options.model_path;
+  return config->IsValid(why);
+}
+
+// The detector, or nullptr (no detector) when disabled or its model is missing; false only when
+// a model exists but cannot be loaded (a broken installation should not go unnoticed).
+bool MakeDetector(const ServerOptions& options, const CenterNetConfig& config,
+                  std::unique_ptr<Detector>* detector, std::string* why) {
+  if (options.no_detector) return true;
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(config.model_path, error)) {
+    std::cerr << "objmap_server: warning: detector model " << config.model_path
+              << " not found; running without a detector, so keyframes sent without "
+                 "detections add no objects (run `bash scripts/setup.sh`, pass --model FILE, "
+                 "or --no-detector to silence this)\n";
+    return true;
+  }
+  *detector = MakeCenterNetDetector(config, why);
+  if (*detector) std::cerr << "objmap_server: detector " << config.model_path << "\n";
+  return *detector != nullptr;
+}
+
+// SIGINT and SIGTERM are blocked in every thread (threads inherit the mask, so this runs before
+// any is started) and taken synchronously by WaitForStopSignal: no handler, no global state.
+sigset_t StopSignals() {
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  return signals;
+}
+
+int WaitForStopSignal(const sigset_t& signals) {
+  int signal = 0;
+  while (sigwait(&signals, &signal) != 0) {
+  }
+  return signal;
+}
+
+int Serve(const ServerOptions& options, const ServerConfig& config) {
+  const sigset_t signals = StopSignals();
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  std::string why;
+  std::unique_ptr<Detector> detector;
+  if (!MakeDetector(options, config.detector, &detector, &why)) {
+    std::cerr << "objmap_server: " << why << "\n";
+    return 1;
+  }
+  std::unique_ptr<MapServer> map_server =
+      MapServer::Open(config.map_server, options.db_path, std::move(detector), &why);
+  if (!map_server) {
+    std::cerr << "objmap_server: cannot open map database " << options.db_path << ": " << why
+              << "\n";
+    return 1;
+  }
+  grpc_service::MapServiceImpl service(*map_server);
+  int port = 0;
+  std::unique_ptr<grpc::Server> server =
+      grpc_service::StartGrpcServer(options.grpc, &service, &port, &why);
+  if (!server) {
+    std::cerr << "objmap_server: " << why << "\n";
+    return 1;
+  }
+  const ServerStatus status = map_server->Status();
+  std::printf("objmap_server listening on %s (db %s, %zu keyframes, %zu objects, version %llu)\n",
+              grpc_service::AddressWithPort(options.grpc.listen_address, port).c_str(),
+              options.db_path.c_str(), status.keyframes, status.objects,
+              static_cast<unsigned long long>(status.map_version));
+  std::fflush(stdout);
+
+  const int signal = WaitForStopSignal(signals);
+  std::cerr << "objmap_server: " << (signal == SIGINT ? "SIGINT" : "SIGTERM")
+            << ", shutting down\n";
+  // New writes are refused first (UNAVAILABLE) and watchers end; then gRPC lets running calls
+  // finish; then the MapServer destructor applies what is still queued.
+  map_server->Shutdown();
+  server->Shutdown(std::chrono::system_clock::now() + kShutdownGrace);
+  server->Wait();
+  map_server.reset();
+  std::cerr << "objmap_server: stopped\n";
+  return 0;
+}
+
+}  // namespace
+}  // namespace objmap
+
+int main(int argc, char** argv) {
+  objmap::ServerOptions options;
+  std::string why;
+  if (!objmap::ParseServerOptions(argc, argv, &options, &why)) {
+    std::cerr << "objmap_server: " << why << "\n" << objmap::ServerUsage();
+    return 2;
+  }
+  if (options.help) {
+    std::cout << objmap::ServerUsage();
+    return 0;
+  }
+  objmap::ServerConfig config;
+  if (!objmap::LoadConfig(options, &config, &why)) {
+    std::cerr << "objmap_server: " << why << "\n";
+    return 1;
+  }
+  if (options.print_config) {
+    std::cout << objmap::ServerConfigToYaml(config);
+    return 0;
+  }
+  return objmap::Serve(options, config);
+}

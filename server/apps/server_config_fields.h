@@ -1,0 +1,99 @@
+#pragma once
+// Private to server_config.cc: the list of sections and keys of objmap_server's YAML file.
+
+#include "server_config.h"
+
+namespace objmap::internal {
+
+// Every section and key of the file, in the example's order. Reading and writing both walk this
+// one list, so the two cannot disagree about a key's name.
+template <typename Visitor>
+void VisitMapper(MapperConfig* m, Visitor& v) {
+  v.Section("mapper");
+  v("min_detection_score", &m->min_detection_score);
+  v("min_segment_points", &m->min_segment_points);
+  v("surface_classes", &m->surface_classes);
+  v("flat_classes", &m->flat_classes);
+  v("flat_box_shrink_fraction", &m->flat_box_shrink_fraction);
+  SegmenterConfig& s = m->segmenter;
+  v.Section("segmenter");
+  v("depth_jump_ratio", &s.depth_jump_ratio);
+  v("normal_step_px", &s.normal_step_px);
+  v("max_planes", &s.max_planes);
+  v("min_plane_area_m2", &s.min_plane_area_m2);
+  v("min_plane_patch_area_m2", &s.min_plane_patch_area_m2);
+  v("plane_distance_m", &s.plane_distance_m);
+  v("plane_normal_angle_deg", &s.plane_normal_angle_deg);
+  v("plane_iterations", &s.plane_iterations);
+  v("cell_px", &s.cell_px);
+  v("kruskal_k_px", &s.kruskal_k_px);
+  v("convex_tolerance", &s.convex_tolerance);
+  v("min_segment_px", &s.min_segment_px);
+  DetectionSegmentConfig& d = m->detection_segment;
+  v.Section("detection_segment");
+  v("dilation_px", &d.dilation_px);
+  v("dilation_fraction", &d.dilation_fraction);
+  v("min_inside_fraction", &d.min_inside_fraction);
+  v("max_box_area_ratio", &d.max_box_area_ratio);
+  v("min_segment_px", &d.min_segment_px);
+  v("depth_gate_m", &d.depth_gate_m);
+  v("min_iou_gain", &d.min_iou_gain);
+  v("fallback_inside_fraction", &d.fallback_inside_fraction);
+}
+
+template <typename Visitor>
+void VisitMapModel(MapperConfig* m, Visitor& v) {
+  AssociationConfig& a = m->association;
+  v.Section("association");
+  v("candidate_margin_m", &a.candidate_margin_m);
+  v("match_distance_m", &a.match_distance_m);
+  v("duplicate_distance_m", &a.duplicate_distance_m);
+  v("min_match_fraction", &a.min_match_fraction);
+  v("max_test_points", &a.max_test_points);
+  v("min_class_share", &a.min_class_share);
+  v.Section("objects");
+  v("model_voxel_size_m", &m->objects.model_voxel_size_m);
+  OccupancyConfig& o = m->occupancy;
+  v.Section("occupancy");
+  v("resolution_m", &o.resolution_m);
+  v("max_range_m", &o.max_range_m);
+  v("probability_hit", &o.probability_hit);
+  v("probability_miss", &o.probability_miss);
+  v("clamping_min", &o.clamping_min);
+  v("clamping_max", &o.clamping_max);
+  v("object_margin_voxels", &o.object_margin_voxels);
+  v("one_ray_per_end_voxel", &o.one_ray_per_end_voxel);
+  InventoryConfig& i = m->inventory;
+  v.Section("inventory");
+  v("min_observations", &i.min_observations);
+  v("min_confidence", &i.min_confidence);
+  v("min_detection_rate", &i.min_detection_rate);
+  v("occlusion_margin_m", &i.occlusion_margin_m);
+}
+
+template <typename Visitor>
+void VisitServerConfig(ServerConfig* c, Visitor& v) {
+  MapServerConfig& s = c->map_server;
+  v.Section("server");
+  v("max_queue", &s.max_queue);
+  v("change_history", &s.change_history);
+  v("max_query_volume_m3", &s.max_query_volume_m3);
+  v("max_listed_voxels", &s.max_listed_voxels);
+  v.Section("store");
+  v("color_jpeg_quality", &s.store.color_jpeg_quality);
+  v("busy_timeout_ms", &s.store.busy_timeout_ms);
+  v("synchronous", &s.store.synchronous);
+  VisitMapper(&s.mapper, v);
+  VisitMapModel(&s.mapper, v);
+  CenterNetConfig& d = c->detector;
+  v.Section("detector");
+  v("model_path", &d.model_path);
+  v("score_threshold", &d.score_threshold);
+  v("input_size", &d.input_size);
+  v("max_detections", &d.max_detections);
+  v("num_threads", &d.num_threads);
+  v("nms_iou", &d.nms_iou);
+  v.Finish();
+}
+
+}  // namespace objmap::internal

@@ -1,0 +1,93 @@
+#include "server_options.h"
+
+#include <cstdlib>
+#include <vector>
+
+namespace objmap {
+namespace {
+
+bool ParseInt(const std::string& flag, const std::string& text, int* value, std::string* why) {
+  if (text.empty()) {
+    *why = flag + " needs a value";
+    return false;
+  }
+  char* end = nullptr;
+  const long parsed = std::strtol(text.c_str(), &end, 10);
+  if (*end != '\0' || parsed < 1 || parsed > 1 << 20) {
+    *why = flag + " expects a positive integer, got '" + text + "'";
+    return false;
+  }
+  *value = static_cast<int>(parsed);
+  return true;
+}
+
+// Flags that take a value, and where it goes.
+bool SetValue(const std::string& flag, const std::string& value, ServerOptions* options,
+              std::string* why) {
+  if (flag == "--db") {
+    options->db_path = value;
+  } else if (flag == "--config") {
+    options->config_path = value;
+  } else if (flag == "--model") {
+    options->model_path = value;
+  } else if (flag == "--listen") {
+    options->grpc.listen_address = value;
+  } else if (flag == "--max-message-mb") {
+    return ParseInt(flag, value, &options->grpc.max_receive_message_mb, why);
+  } else {
+    *why = "unknown option " + flag;
+    return false;
+  }
+  if (value.empty()) {
+    *why = flag + " needs a value";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool ParseServerOptions(int argc, const char* const* argv, ServerOptions* options,
+                        std::string* why) {
+  const std::vector<std::string> args(argv + 1, argv + argc);
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& arg = args[i];
+    if (arg == "--help" || arg == "-h") {
+      options->help = true;
+    } else if (arg == "--no-detector") {
+      options->no_detector = true;
+    } else if (arg == "--print-config") {
+      options->print_config = true;
+    } else if (arg.rfind("--", 0) != 0) {
+      *why = "unexpected argument '" + arg + "'";
+      return false;
+    } else if (const std::size_t equals = arg.find('='); equals != std::string::npos) {
+      if (!SetValue(arg.substr(0, equals), arg.substr(equals + 1), options, why)) return false;
+    } else {
+      // "--db --listen ..." is a missing value, not a database named "--listen".
+      const bool has_value = i + 1 < args.size() && args[i + 1].rfind("--", 0) != 0;
+      if (!SetValue(arg, has_value ? args[i + 1] : "", options, why)) return false;
+      ++i;
+    }
+  }
+  if (options->db_path.empty() && !options->help && !options->print_config) {
+    *why = "--db PATH is required";
+    return false;
+  }
+  return true;
+}
+
+const char* ServerUsage() {
+  return "usage: objmap_server --db map.db [options]\n"
+         "  --db PATH             SQLite map database (created when missing)\n"
+         "  --listen HOST:PORT    address to serve on (default 127.0.0.1:50051; port 0 picks a\n"
+         "                        free port, printed on the 'listening' line)\n"
+         "  --config FILE         YAML configuration (see server/apps/objmap.example.yaml)\n"
+         "  --model FILE          CenterNet GraphDef for keyframes sent without detections\n"
+         "  --no-detector         run no detector: keyframes without detections add no objects\n"
+         "  --max-message-mb N    largest request accepted, MiB (default 64)\n"
+         "  --print-config        print the effective configuration as YAML and exit\n"
+         "Stops cleanly on SIGINT or SIGTERM: acknowledged keyframes are always durable.\n";
+}
+
+}  // namespace objmap

@@ -1,0 +1,40 @@
+#pragma once
+// AddKeyframeRequest -> RgbdFrame (+ caller detections): image decoding (OpenCV stays in the .cc)
+// and every check that names a request field.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "objmap.pb.h"
+#include "types/detection.h"
+#include "types/frame.h"
+
+namespace objmap::grpc_service {
+
+/// Images larger than this many pixels are refused before decoding: a small PNG can expand to
+/// gigabytes, and no RGB-D camera comes near this.
+inline constexpr std::int64_t kMaxImagePixels = std::int64_t{1} << 26;
+
+/// Metres per unit of 16-bit depth when the request leaves depth_scale at 0.
+inline constexpr double kDefaultDepthScale = 0.001;
+
+/// Decodes the colour image (PNG, JPEG or RAW_RGB8) into RGB8. Its size must equal the
+/// intrinsics'; errors name "color" / "color.data" and both sizes.
+[[nodiscard]] bool DecodeColorImage(const v1::Image& image, const CameraIntrinsics& intrinsics,
+                                    ColorImage* color, std::string* why);
+
+/// Decodes the depth image (16-bit PNG or RAW_DEPTH_U16 times depth_scale, or RAW_DEPTH_F32
+/// metres) into metres; non-finite and negative metres become 0 (no depth). Its size must equal
+/// the intrinsics'; errors name "depth" / "depth.data" and both sizes.
+[[nodiscard]] bool DecodeDepthImage(const v1::Image& image, const CameraIntrinsics& intrinsics,
+                                    DepthImage* depth, std::string* why);
+
+/// The frame of a request (intrinsics, T_W_C, stamp, images) and its detections: set when the
+/// request says detections_given, otherwise nullopt (the server's detector runs). False with a
+/// reason naming the field ("T_W_C.qw ...", "detections[3].class_name ...").
+[[nodiscard]] bool FrameFromRequest(const v1::AddKeyframeRequest& request, RgbdFrame* frame,
+                                    std::optional<std::vector<Detection>>* detections,
+                                    std::string* why);
+
+}  // namespace objmap::grpc_service

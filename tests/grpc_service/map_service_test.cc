@@ -1,0 +1,242 @@
+// MapServiceImpl over real gRPC on 127.0.0.1 (a free port) with a real MapServer on a temporary
+// SQLite file: status codes, field names in errors, the ingest stream, WatchMap, message limits.
+// Keyframes are encoded by the client library, so these also check the wire format both agree on.
+#include "grpc_service/map_service.h"
+
+#include <grpcpp/grpcpp.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <thread>
+
+#include "grpc_service/grpc_server.h"
+#include "objmap/keyframe_request.h"
+#include "test_scenes.h"
+#include "types/coco_classes.h"
+
+namespace objmap::grpc_service {
+namespace {
+
+using testing::SceneBox;
+
+class MapServiceTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    db_path_ = ::testing::TempDir() + "objmap_map_service_" + std::to_string(getpid()) + "_" +
+               info->name() + ".db";
+    RemoveDatabase();
+    K_.width = 160;  // small frames keep the test fast
+    K_.height = 120;
+    K_.fx = K_.fy = 146.25;
+    K_.cx = 80.0;
+    K_.cy = 60.0;
+    Start(64);
+  }
+  void TearDown() override {
+    Stop();
+    RemoveDatabase();
+  }
+
+  void Start(int max_message_mb) {
+    std::string why;
+    map_server_ = MapServer::Open(MapServerConfig{}, db_path_, nullptr, &why);
+    ASSERT_TRUE(map_server_) << why;
+    service_ = std::make_unique<MapServiceImpl>(*map_server_);
+    GrpcServerOptions options;
+    options.listen_address = "127.0.0.1:0";
+    options.max_receive_message_mb = max_message_mb;
+    int port = 0;
+    server_ = StartGrpcServer(options, service_.get(), &port, &why);
+    ASSERT_TRUE(server_) << why;
+    grpc::ChannelArguments arguments;
+    arguments.SetMaxReceiveMessageSize(-1);
+    arguments.SetMaxSendMessageSize(-1);
+    stub_ = v1::MapService::NewStub(
+        grpc::CreateCustomChannel(AddressWithPort(options.listen_address, port),
+                                  grpc::InsecureChannelCredentials(), arguments));
+  }
+  void Stop() {
+    if (map_server_) map_server_->Shutdown();
+    if (server_) server_->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(2));
+    server_.reset();
+    service_.reset();
+    map_server_.reset();
+  }
+  void RemoveDatabase() const {
+    for (const char* suffix : {"", "-wal", "-shm"}) std::remove((db_path_ + suffix).c_str());
+  }
+
+  // A table with a cup, seen from viewpoint `view`, with the cup's detection.
+  v1::AddKeyframeRequest Keyframe(int view) const {
+    const std::vector<SceneBox> boxes = {{{-0.6, -0.8, 0.60}, {0.6, 0.8, 0.70}, {150, 100, 60}},
+                                         {{-0.05, -0.05, 0.70}, {0.05, 0.05, 0.82}, {200, 30, 30}}};
+    const Eigen::Isometry3d T_W_C =
+        testing::LookAt({-1.0, 0.1 * view, 1.3}, Eigen::Vector3d(0, 0, 0.7));
+    const RgbdFrame frame = testing::RenderFrame(boxes, K_, T_W_C, "view-" + std::to_string(view));
+    const std::vector<Detection> detections = {
+        {testing::ProjectBox(boxes[1], T_W_C, K_), CocoClassId("cup"), 0.8f}};
+    v1::AddKeyframeRequest request;
+    std::string why;
+    EXPECT_TRUE(MakeAddKeyframeRequest(frame, &detections, KeyframeEncoding{}, &request, &why))
+        << why;
+    return request;
+  }
+
+  grpc::Status Add(const v1::AddKeyframeRequest& request, v1::AddKeyframeResponse* response) {
+    grpc::ClientContext context;
+    return stub_->AddKeyframe(&context, request, response);
+  }
+
+  std::string db_path_;
+  CameraIntrinsics K_;
+  std::unique_ptr<MapServer> map_server_;
+  std::unique_ptr<MapServiceImpl> service_;
+  std::unique_ptr<grpc::Server> server_;
+  std::unique_ptr<v1::MapService::Stub> stub_;
+};
+
+TEST_F(MapServiceTest, AddedKeyframeMakesAQueryableObject) {
+  v1::AddKeyframeResponse added;
+  const grpc::Status status = Add(Keyframe(0), &added);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(added.keyframe_id(), 1);
+  EXPECT_EQ(added.detections_used(), 1);
+  ASSERT_EQ(added.created_objects_size(), 1);
+
+  grpc::ClientContext context;
+  v1::QueryObjectsRequest query;
+  query.set_class_name("cup");
+  query.set_include_unconfirmed(true);  // one view does not pass the inventory thresholds
+  v1::QueryObjectsResponse objects;
+  ASSERT_TRUE(stub_->QueryObjects(&context, query, &objects).ok());
+  ASSERT_EQ(objects.objects_size(), 1);
+  EXPECT_EQ(objects.objects(0).class_name(), "cup");
+  EXPECT_NEAR(objects.objects(0).centroid().z(), 0.76, 0.05);
+  EXPECT_EQ(objects.objects(0).num_points(), 0);  // no model unless asked
+
+  grpc::ClientContext get_context;
+  v1::GetObjectRequest get;
+  get.set_id(added.created_objects(0));
+  get.set_include_model(true);
+  v1::Object object;
+  ASSERT_TRUE(stub_->GetObject(&get_context, get, &object).ok());
+  EXPECT_GT(object.num_points(), 10);
+  EXPECT_EQ(object.points_xyz().size(), 12u * object.num_points());
+}
+
+TEST_F(MapServiceTest, BadRequestsGetTheirCodeAndNameTheField) {
+  grpc::ClientContext get_context;
+  v1::GetObjectRequest get;
+  get.set_id(12345);
+  v1::Object object;
+  EXPECT_EQ(stub_->GetObject(&get_context, get, &object).error_code(), grpc::StatusCode::NOT_FOUND);
+
+  grpc::ClientContext query_context;
+  v1::QueryObjectsRequest query;
+  query.set_class_name("unicorn");
+  v1::QueryObjectsResponse objects;
+  const grpc::Status unicorn = stub_->QueryObjects(&query_context, query, &objects);
+  EXPECT_EQ(unicorn.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(unicorn.error_message(), "class_name 'unicorn' is not a COCO class");
+
+  grpc::ClientContext free_context;
+  v1::IsFreeRequest is_free;
+  is_free.mutable_region()->mutable_min()->set_x(1.0);  // min.x > max.x
+  v1::IsFreeResponse free;
+  const grpc::Status box = stub_->IsFree(&free_context, is_free, &free);
+  EXPECT_EQ(box.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(box.error_message().find("region.min.x"), std::string::npos) << box.error_message();
+
+  v1::AddKeyframeRequest request = Keyframe(0);
+  request.mutable_t_w_c()->set_qw(0.5);
+  v1::AddKeyframeResponse added;
+  const grpc::Status pose = Add(request, &added);
+  EXPECT_EQ(pose.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(pose.error_message().rfind("T_W_C.q", 0), 0u) << pose.error_message();
+  EXPECT_EQ(map_server_->Status().keyframes, 0u);  // nothing stored
+}
+
+TEST_F(MapServiceTest, IngestStopsAtTheFirstBadKeyframeAndKeepsTheOnesBefore) {
+  grpc::ClientContext context;
+  v1::IngestSummary summary;
+  auto writer = stub_->IngestKeyframes(&context, &summary);
+  for (int view = 0; view < 3; ++view) ASSERT_TRUE(writer->Write(Keyframe(view)));
+  v1::AddKeyframeRequest bad = Keyframe(3);
+  bad.mutable_detections(0)->set_class_name("unicorn");
+  writer->Write(bad);
+  writer->Write(Keyframe(4));  // may or may not be accepted by the transport; never stored
+  writer->WritesDone();
+  const grpc::Status status = writer->Finish();
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(status.error_message(),
+            "keyframe 3 (view-3): detections[0].class_name 'unicorn' is not a COCO class");
+  EXPECT_EQ(map_server_->Status().keyframes, 3u);
+
+  grpc::ClientContext good_context;
+  v1::IngestSummary good;
+  auto good_writer = stub_->IngestKeyframes(&good_context, &good);
+  for (int view = 4; view < 6; ++view) ASSERT_TRUE(good_writer->Write(Keyframe(view)));
+  good_writer->WritesDone();
+  ASSERT_TRUE(good_writer->Finish().ok());
+  EXPECT_EQ(good.keyframes_added(), 2);
+  EXPECT_EQ(good.first_keyframe_id(), 4);
+  EXPECT_EQ(good.last_keyframe_id(), 5);
+  EXPECT_EQ(good.map_version(), map_server_->Snapshot()->version);
+}
+
+TEST_F(MapServiceTest, WatchMapStreamsNewKeyframesUntilCancelled) {
+  grpc::ClientContext context;
+  v1::WatchMapRequest watch;
+  auto reader = stub_->WatchMap(&context, watch);
+  v1::AddKeyframeResponse added;
+  ASSERT_TRUE(Add(Keyframe(0), &added).ok());
+  v1::MapChange change;
+  ASSERT_TRUE(reader->Read(&change));
+  EXPECT_EQ(change.kind(), v1::MapChange::KEYFRAME_ADDED);
+  EXPECT_EQ(change.keyframe_id(), added.keyframe_id());
+  EXPECT_EQ(change.map_version(), added.map_version());
+  EXPECT_EQ(change.added_objects_size(), added.created_objects_size());
+  context.TryCancel();
+  while (reader->Read(&change)) {
+  }
+  EXPECT_EQ(reader->Finish().error_code(), grpc::StatusCode::CANCELLED);
+}
+
+TEST_F(MapServiceTest, OversizedRequestsAreRefusedAndTheServerKeepsServing) {
+  Stop();
+  Start(1);
+  v1::AddKeyframeRequest request = Keyframe(0);
+  request.mutable_color()->mutable_data()->append(2 * 1024 * 1024, '\0');
+  v1::AddKeyframeResponse added;
+  EXPECT_EQ(Add(request, &added).error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  const grpc::Status status = Add(Keyframe(0), &added);
+  EXPECT_TRUE(status.ok()) << status.error_message();
+}
+
+TEST_F(MapServiceTest, UpdatePosesRejectsRepeatedIdsAndWritesAfterShutdownAreUnavailable) {
+  v1::AddKeyframeResponse added;
+  ASSERT_TRUE(Add(Keyframe(0), &added).ok());
+  v1::UpdatePosesRequest update;
+  for (int i = 0; i < 2; ++i) {
+    v1::KeyframePose* pose = update.add_poses();
+    pose->set_keyframe_id(added.keyframe_id());
+    pose->mutable_t_w_c()->set_qw(1.0);
+  }
+  grpc::ClientContext context;
+  v1::UpdatePosesResponse response;
+  const grpc::Status twice = stub_->UpdatePoses(&context, update, &response);
+  EXPECT_EQ(twice.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(twice.error_message(), "poses[1].keyframe_id 1 appears more than once");
+
+  map_server_->Shutdown();
+  EXPECT_EQ(Add(Keyframe(1), &added).error_code(), grpc::StatusCode::UNAVAILABLE);
+  grpc::ClientContext status_context;
+  v1::StatusResponse status;
+  ASSERT_TRUE(stub_->Status(&status_context, v1::StatusRequest{}, &status).ok());
+  EXPECT_EQ(status.keyframes(), 1);  // queries keep answering
+}
+
+}  // namespace
+}  // namespace objmap::grpc_service
