@@ -23,6 +23,9 @@ std::unique_ptr<grpc::Server> StartGrpcServer(const GrpcServerOptions& options,
   *port = 0;
   builder.AddListeningPort(options.listen_address, grpc::InsecureServerCredentials(), port);
   builder.SetMaxReceiveMessageSize(options.max_receive_message_mb * 1024 * 1024);
+  // gRPC sets SO_REUSEPORT by default: a second server on a busy port would then start and share
+  // its connections with the first (each with its own database) instead of failing.
+  builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
   builder.RegisterService(service);
   std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
   // The selected port is only filled in by BuildAndStart; 0 means binding failed.

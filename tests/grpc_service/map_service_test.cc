@@ -47,14 +47,13 @@ class MapServiceTest : public ::testing::Test {
     GrpcServerOptions options;
     options.listen_address = "127.0.0.1:0";
     options.max_receive_message_mb = max_message_mb;
-    int port = 0;
-    server_ = StartGrpcServer(options, service_.get(), &port, &why);
+    server_ = StartGrpcServer(options, service_.get(), &port_, &why);
     ASSERT_TRUE(server_) << why;
     grpc::ChannelArguments arguments;
     arguments.SetMaxReceiveMessageSize(-1);
     arguments.SetMaxSendMessageSize(-1);
     stub_ = v1::MapService::NewStub(
-        grpc::CreateCustomChannel(AddressWithPort(options.listen_address, port),
+        grpc::CreateCustomChannel(AddressWithPort(options.listen_address, port_),
                                   grpc::InsecureChannelCredentials(), arguments));
   }
   void Stop() {
@@ -90,6 +89,7 @@ class MapServiceTest : public ::testing::Test {
   }
 
   std::string db_path_;
+  int port_ = 0;
   CameraIntrinsics K_;
   std::unique_ptr<MapServer> map_server_;
   std::unique_ptr<MapServiceImpl> service_;
@@ -204,6 +204,20 @@ TEST_F(MapServiceTest, WatchMapStreamsNewKeyframesUntilCancelled) {
   EXPECT_EQ(reader->Finish().error_code(), grpc::StatusCode::CANCELLED);
 }
 
+TEST_F(MapServiceTest, WatchMapEndsUnavailableWhenTheServerShutsDown) {
+  grpc::ClientContext context;
+  auto reader = stub_->WatchMap(&context, v1::WatchMapRequest{});
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));  // the watch is waiting
+  const auto start = std::chrono::steady_clock::now();
+  map_server_->Shutdown();
+  v1::MapChange change;
+  while (reader->Read(&change)) {
+  }
+  const grpc::Status status = reader->Finish();
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::UNAVAILABLE) << status.error_message();
+  EXPECT_LT(std::chrono::steady_clock::now() - start, 2 * MapServiceImpl::kWatchPoll);
+}
+
 TEST_F(MapServiceTest, OversizedRequestsAreRefusedAndTheServerKeepsServing) {
   Stop();
   Start(1);
@@ -213,6 +227,18 @@ TEST_F(MapServiceTest, OversizedRequestsAreRefusedAndTheServerKeepsServing) {
   EXPECT_EQ(Add(request, &added).error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
   const grpc::Status status = Add(Keyframe(0), &added);
   EXPECT_TRUE(status.ok()) << status.error_message();
+}
+
+TEST_F(MapServiceTest, ABusyPortIsAnErrorNotASharedPort) {
+  GrpcServerOptions options;
+  options.listen_address = AddressWithPort("127.0.0.1:0", port_);
+  MapServiceImpl second(*map_server_);
+  int port = 0;
+  std::string why;
+  EXPECT_EQ(StartGrpcServer(options, &second, &port, &why), nullptr);
+  EXPECT_NE(why.find("cannot listen on " + options.listen_address), std::string::npos) << why;
+  EXPECT_EQ(AddressWithPort("[::1]:0", 4711), "[::1]:4711");
+  EXPECT_EQ(AddressWithPort("localhost", 4711), "localhost:4711");
 }
 
 TEST_F(MapServiceTest, UpdatePosesRejectsRepeatedIdsAndWritesAfterShutdownAreUnavailable) {
