@@ -63,36 +63,48 @@ int WaitForStopSignal(const sigset_t& signals) {
   return signal;
 }
 
-int Serve(const ServerOptions& options, const ServerConfig& config) {
-  const sigset_t signals = StopSignals();
-  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+// The detector and the map server, or nullptr after printing why not.
+std::unique_ptr<MapServer> OpenMapServer(const ServerOptions& options, const ServerConfig& config) {
   std::string why;
   std::unique_ptr<Detector> detector;
   if (!MakeDetector(options, config.detector, &detector, &why)) {
     std::cerr << "objmap_server: " << why << "\n";
-    return 1;
+    return nullptr;
   }
   std::unique_ptr<MapServer> map_server =
       MapServer::Open(config.map_server, options.db_path, std::move(detector), &why);
   if (!map_server) {
     std::cerr << "objmap_server: cannot open map database " << options.db_path << ": " << why
               << "\n";
-    return 1;
   }
+  return map_server;
+}
+
+// The line scripts and tests wait for; with the port actually bound (--listen HOST:0).
+void PrintListening(const ServerOptions& options, int port, const MapServer& map_server) {
+  const ServerStatus status = map_server.Status();
+  std::printf("objmap_server listening on %s (db %s, %zu keyframes, %zu objects, version %llu)\n",
+              grpc_service::AddressWithPort(options.grpc.listen_address, port).c_str(),
+              options.db_path.c_str(), status.keyframes, status.objects,
+              static_cast<unsigned long long>(status.map_version));
+  std::fflush(stdout);
+}
+
+int Serve(const ServerOptions& options, const ServerConfig& config) {
+  const sigset_t signals = StopSignals();
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  std::unique_ptr<MapServer> map_server = OpenMapServer(options, config);
+  if (!map_server) return 1;
   grpc_service::MapServiceImpl service(*map_server);
   int port = 0;
+  std::string why;
   std::unique_ptr<grpc::Server> server =
       grpc_service::StartGrpcServer(options.grpc, &service, &port, &why);
   if (!server) {
     std::cerr << "objmap_server: " << why << "\n";
     return 1;
   }
-  const ServerStatus status = map_server->Status();
-  std::printf("objmap_server listening on %s (db %s, %zu keyframes, %zu objects, version %llu)\n",
-              grpc_service::AddressWithPort(options.grpc.listen_address, port).c_str(),
-              options.db_path.c_str(), status.keyframes, status.objects,
-              static_cast<unsigned long long>(status.map_version));
-  std::fflush(stdout);
+  PrintListening(options, port, *map_server);
 
   const int signal = WaitForStopSignal(signals);
   std::cerr << "objmap_server: " << (signal == SIGINT ? "SIGINT" : "SIGTERM")

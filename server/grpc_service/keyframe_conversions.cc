@@ -78,6 +78,19 @@ bool Decode(const std::string& data, int flags, const std::string& field, cv::Ma
   return true;
 }
 
+void CopyBgrAsRgb(const cv::Mat& bgr, ColorImage* color) {
+  color->rgb.resize(static_cast<std::size_t>(bgr.cols) * bgr.rows * 3);
+  for (int v = 0; v < bgr.rows; ++v) {
+    const auto* row = bgr.ptr<cv::Vec3b>(v);
+    std::uint8_t* rgb = color->rgb.data() + static_cast<std::size_t>(v) * bgr.cols * 3;
+    for (int u = 0; u < bgr.cols; ++u) {
+      rgb[3 * u] = row[u][2];
+      rgb[3 * u + 1] = row[u][1];
+      rgb[3 * u + 2] = row[u][0];
+    }
+  }
+}
+
 bool CheckPixelCount(const CameraIntrinsics& K, std::string* why) {
   if (std::int64_t{K.width} * K.height > kMaxImagePixels) {
     *why = "intrinsics: " + SizeText(K.width, K.height) + " exceeds the largest image served (" +
@@ -155,16 +168,7 @@ bool DecodeColorImage(const v1::Image& image, const CameraIntrinsics& K, ColorIm
            SizeText(K.width, K.height);
     return false;
   }
-  color->rgb.resize(static_cast<std::size_t>(K.width) * K.height * 3);
-  for (int v = 0; v < bgr.rows; ++v) {
-    const auto* row = bgr.ptr<cv::Vec3b>(v);
-    std::uint8_t* rgb = color->rgb.data() + static_cast<std::size_t>(v) * K.width * 3;
-    for (int u = 0; u < bgr.cols; ++u) {
-      rgb[3 * u] = row[u][2];
-      rgb[3 * u + 1] = row[u][1];
-      rgb[3 * u + 2] = row[u][0];
-    }
-  }
+  CopyBgrAsRgb(bgr, color);
   return true;
 }
 
