@@ -38,8 +38,10 @@ void SnapshotBuilder::Touch(int class_id, std::uint64_t version) {
 
 std::shared_ptr<const MapSnapshot> SnapshotBuilder::Build(const Mapper& mapper,
                                                           std::uint64_t version, Diff* diff) {
+  // Computed once: confirmation projects every object into every keyframe.
+  const std::vector<const MapObject*> confirmed_objects = mapper.ConfirmedObjects();
   std::set<ObjectId> confirmed;
-  for (const MapObject* object : mapper.ConfirmedObjects()) confirmed.insert(object->id);
+  for (const MapObject* object : confirmed_objects) confirmed.insert(object->id);
 
   auto snapshot = std::make_shared<MapSnapshot>();
   snapshot->version = version;
@@ -72,21 +74,7 @@ std::shared_ptr<const MapSnapshot> SnapshotBuilder::Build(const Mapper& mapper,
   }
   views_ = snapshot->objects;
 
-  std::map<int, InventoryEntry> by_class;
-  for (const auto& [id, view] : snapshot->objects) {
-    if (!view->confirmed) continue;
-    InventoryEntry& entry = by_class[view->class_id];
-    entry.class_id = view->class_id;
-    ++entry.count;
-    entry.mean_confidence += view->confidence;
-    entry.objects.push_back(id);
-  }
-  for (auto& [class_id, entry] : by_class) {
-    entry.mean_confidence /= static_cast<float>(entry.count);
-    snapshot->inventory.push_back(entry);
-  }
-  std::stable_sort(snapshot->inventory.begin(), snapshot->inventory.end(),
-                   [](const InventoryEntry& a, const InventoryEntry& b) { return a.count > b.count; });
+  snapshot->inventory = InventoryOf(confirmed_objects);
   snapshot->class_changed_version.assign(class_changed_version_.begin(),
                                          class_changed_version_.end());
   if (diff != nullptr) *diff = std::move(local);

@@ -296,9 +296,9 @@ std::vector<const MapObject*> Mapper::ConfirmedObjects() const {
   return confirmed;
 }
 
-std::vector<InventoryEntry> Mapper::Inventory() const {
+std::vector<InventoryEntry> InventoryOf(const std::vector<const MapObject*>& objects) {
   std::map<int, InventoryEntry> by_class;
-  for (const MapObject* object : ConfirmedObjects()) {
+  for (const MapObject* object : objects) {
     InventoryEntry& entry = by_class[object->Label()];
     entry.class_id = object->Label();
     ++entry.count;
@@ -315,6 +315,8 @@ std::vector<InventoryEntry> Mapper::Inventory() const {
       [](const InventoryEntry& a, const InventoryEntry& b) { return a.count > b.count; });
   return inventory;
 }
+
+std::vector<InventoryEntry> Mapper::Inventory() const { return InventoryOf(ConfirmedObjects()); }
 
 const ObjectMap& Mapper::objects() const { return impl_->objects; }
 const OccupancyMap& Mapper::occupancy() const { return *impl_->occupancy; }

@@ -88,6 +88,9 @@ struct InventoryEntry {
   std::vector<ObjectId> objects;
 };
 
+/// Groups objects by label: count, mean confidence and ids per class, most frequent first.
+[[nodiscard]] std::vector<InventoryEntry> InventoryOf(const std::vector<const MapObject*>& objects);
+
 /// What the mapper keeps of a keyframe to regenerate the map after its pose changes: the depth
 /// image (millimetres, as sensors deliver it: 2 bytes a pixel) and which pixels belong to objects.
 /// Clouds are re-made from it, so a regenerated map is the map full-resolution integration builds.
