@@ -30,7 +30,7 @@ v1::QueryObjectsRequest RequestFrom(Arguments& args) {
         BoxToProto({region[0], region[1], region[2]}, {region[3], region[4], region[5]});
   }
   const std::vector<double> near = args.GetNumbers("--near");
-  if (near.size() == 3) *request.mutable_nearest_to() = Vec3ToProto({near[0], near[1], near[2]});
+  if (near.size() == 3) *request.mutable_nearest_to() = Vec3ToProto(Eigen::Vector3d(near[0], near[1], near[2]));
   request.set_min_confidence(static_cast<float>(args.GetNumber("--min-confidence", 0.0)));
   request.set_max_results(static_cast<std::int32_t>(args.GetInteger("--limit", 0, 0)));
   request.set_include_unconfirmed(args.Has("--all"));

@@ -29,17 +29,6 @@ float ReadFloatLe(const std::string& bytes, std::size_t offset) {
 
 }  // namespace
 
-v1::Pose PoseToProto(const Eigen::Isometry3d& T) {
-  v1::Pose pose;
-  *pose.mutable_translation() = Vec3ToProto(T.translation());
-  const Eigen::Quaterniond q(T.rotation());
-  pose.set_qx(q.x());
-  pose.set_qy(q.y());
-  pose.set_qz(q.z());
-  pose.set_qw(q.w());
-  return pose;
-}
-
 bool PoseFromProto(const v1::Pose& pose, Eigen::Isometry3d* T, std::string* why) {
   const Eigen::Vector3d t = Vec3FromProto(pose.translation());
   const Eigen::Vector4d q(pose.qx(), pose.qy(), pose.qz(), pose.qw());
@@ -56,23 +45,6 @@ bool PoseFromProto(const v1::Pose& pose, Eigen::Isometry3d* T, std::string* why)
   T->linear() = rotation.toRotationMatrix();
   T->translation() = t;
   return true;
-}
-
-v1::Vec3 Vec3ToProto(const Eigen::Vector3d& v) {
-  v1::Vec3 out;
-  out.set_x(v.x());
-  out.set_y(v.y());
-  out.set_z(v.z());
-  return out;
-}
-
-Eigen::Vector3d Vec3FromProto(const v1::Vec3& v) { return {v.x(), v.y(), v.z()}; }
-
-v1::Box BoxToProto(const Eigen::Vector3d& min_W, const Eigen::Vector3d& max_W) {
-  v1::Box box;
-  *box.mutable_min() = Vec3ToProto(min_W);
-  *box.mutable_max() = Vec3ToProto(max_W);
-  return box;
 }
 
 bool DecodeObjectModel(const v1::Object& object, std::vector<Eigen::Vector3f>* points_W,

@@ -16,6 +16,7 @@
 
 #include "map_server/map_server.h"
 #include "objmap.pb.h"
+#include "proto_geometry.h"  // Vec3ToProto, Vec3FromProto, PoseToProto
 #include "types/detection.h"
 #include "types/frame.h"
 
@@ -28,12 +29,6 @@ inline constexpr double kQuaternionNormTolerance = 1e-3;
 /// The gRPC status of a core status (kInvalidArgument -> INVALID_ARGUMENT, ...).
 [[nodiscard]] grpc::Status ToGrpcStatus(const ServiceStatus& status);
 
-[[nodiscard]] v1::Vec3 Vec3ToProto(const Eigen::Vector3d& v);
-[[nodiscard]] v1::Vec3 Vec3ToProto(const Eigen::Vector3f& v);
-[[nodiscard]] Eigen::Vector3d Vec3FromProto(const v1::Vec3& v);
-
-/// T as translation + unit quaternion (x, y, z, w).
-[[nodiscard]] v1::Pose PoseToProto(const Eigen::Isometry3d& T);
 /// The rigid transform of `pose`: finite entries, quaternion norm within the tolerance of 1
 /// (then normalized). Otherwise false with a reason naming `field` ("T_W_C.qw is NaN").
 [[nodiscard]] bool PoseFromProto(const v1::Pose& pose, const std::string& field,
