@@ -42,8 +42,12 @@ int RunFreeCommand(int argc, char** argv) {
     std::cout << "free\n";
     return kExitOk;
   }
-  std::cout << "not free (occupied " << response.occupied() << ", unknown " << response.unknown()
-            << ")\n";
+  std::cout << "not free (occupied " << response.occupied() << ", unknown " << response.unknown();
+  if (response.object_ids_size() > 0) {
+    std::cout << ", objects";
+    for (std::int64_t id : response.object_ids()) std::cout << " " << id;
+  }
+  std::cout << ")\n";
   return kExitNotFree;
 }
 

@@ -75,6 +75,11 @@ grpc::Status MapClient::UpdatePoses(const v1::UpdatePosesRequest& request,
   return Call(&Stub::UpdatePoses, request, response);
 }
 
+grpc::Status MapClient::ListKeyframes(const v1::ListKeyframesRequest& request,
+                                      v1::ListKeyframesResponse* response) {
+  return Call(&Stub::ListKeyframes, request, response);
+}
+
 grpc::Status MapClient::QueryObjects(const v1::QueryObjectsRequest& request,
                                      v1::QueryObjectsResponse* response) {
   return Call(&Stub::QueryObjects, request, response);

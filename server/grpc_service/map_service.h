@@ -29,6 +29,9 @@ class MapServiceImpl final : public v1::MapService::Service {
                                v1::IngestSummary* summary) override;
   grpc::Status UpdatePoses(grpc::ServerContext* context, const v1::UpdatePosesRequest* request,
                            v1::UpdatePosesResponse* response) override;
+  grpc::Status ListKeyframes(grpc::ServerContext* context,
+                             const v1::ListKeyframesRequest* request,
+                             v1::ListKeyframesResponse* response) override;
 
   grpc::Status QueryObjects(grpc::ServerContext* context, const v1::QueryObjectsRequest* request,
                             v1::QueryObjectsResponse* response) override;

@@ -44,6 +44,32 @@ bool RequiredBox(bool has_box, const v1::Box& box,
 
 }  // namespace
 
+grpc::Status MapServiceImpl::ListKeyframes(grpc::ServerContext* /*context*/,
+                                           const v1::ListKeyframesRequest* request,
+                                           v1::ListKeyframesResponse* response) {
+  return Guarded("ListKeyframes", [&] {
+    if (request->max_results() < 0) {
+      return Invalid("max_results " + std::to_string(request->max_results()) +
+                     " must be >= 0 (0: all)");
+    }
+    std::vector<KeyframeSummary> keyframes;
+    std::uint64_t version = 0;
+    const grpc::Status status = ToGrpcStatus(server_.ListKeyframes(
+        request->first_id(), static_cast<std::size_t>(request->max_results()), &keyframes,
+        &version));
+    if (!status.ok()) return status;
+    response->set_map_version(version);
+    for (const KeyframeSummary& keyframe : keyframes) {
+      v1::KeyframeInfo* info = response->add_keyframes();
+      info->set_id(keyframe.id);
+      info->set_stamp(keyframe.stamp_s);
+      info->set_name(keyframe.name);
+      *info->mutable_t_w_c() = PoseToProto(keyframe.T_W_C);
+    }
+    return status;
+  });
+}
+
 grpc::Status MapServiceImpl::QueryObjects(grpc::ServerContext* /*context*/,
                                           const v1::QueryObjectsRequest* request,
                                           v1::QueryObjectsResponse* response) {
@@ -134,12 +160,15 @@ grpc::Status MapServiceImpl::IsFree(grpc::ServerContext* /*context*/,
     bool free = false;
     RegionOccupancy counts;
     std::uint64_t version = 0;
-    const grpc::Status status = ToGrpcStatus(server_.IsFree(
-        box_W.first, box_W.second, request->unknown_is_free(), &free, &counts, &version));
+    std::vector<ObjectId> objects;
+    const grpc::Status status =
+        ToGrpcStatus(server_.IsFree(box_W.first, box_W.second, request->unknown_is_free(), &free,
+                                    &counts, &objects, &version));
     if (!status.ok()) return status;
     response->set_free(free);
     response->set_occupied(counts.occupied);
     response->set_unknown(counts.unknown);
+    response->mutable_object_ids()->Add(objects.begin(), objects.end());
     response->set_map_version(version);
     return status;
   });

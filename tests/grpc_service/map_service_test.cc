@@ -158,6 +158,57 @@ TEST_F(MapServiceTest, BadRequestsGetTheirCodeAndNameTheField) {
   EXPECT_EQ(map_server_->Status().keyframes, 0u);  // nothing stored
 }
 
+TEST_F(MapServiceTest, ListKeyframesPagesThroughStoredKeyframesWithTheirCurrentPoses) {
+  for (int view = 0; view < 3; ++view) {
+    v1::AddKeyframeResponse added;
+    v1::AddKeyframeRequest request = Keyframe(view);
+    request.set_stamp(10.0 + view);
+    ASSERT_TRUE(Add(request, &added).ok());
+  }
+  auto list = [&](std::int64_t first_id, int max_results, v1::ListKeyframesResponse* response) {
+    grpc::ClientContext context;
+    v1::ListKeyframesRequest request;
+    request.set_first_id(first_id);
+    request.set_max_results(max_results);
+    return stub_->ListKeyframes(&context, request, response);
+  };
+  v1::ListKeyframesResponse all;
+  ASSERT_TRUE(list(0, 0, &all).ok());
+  EXPECT_EQ(all.map_version(), 3u);
+  ASSERT_EQ(all.keyframes_size(), 3);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(all.keyframes(i).id(), i + 1);
+    EXPECT_EQ(all.keyframes(i).name(), "view-" + std::to_string(i));
+    EXPECT_DOUBLE_EQ(all.keyframes(i).stamp(), 10.0 + i);
+    EXPECT_NEAR(all.keyframes(i).t_w_c().translation().y(), 0.1 * i, 1e-9);
+  }
+  v1::ListKeyframesResponse page;
+  ASSERT_TRUE(list(2, 1, &page).ok());
+  ASSERT_EQ(page.keyframes_size(), 1);
+  EXPECT_EQ(page.keyframes(0).id(), 2);
+
+  // A pose update shows in the list.
+  v1::UpdatePosesRequest update;
+  update.set_wait(true);
+  v1::KeyframePose* moved = update.add_poses();
+  moved->set_keyframe_id(3);
+  *moved->mutable_t_w_c() = all.keyframes(2).t_w_c();
+  moved->mutable_t_w_c()->mutable_translation()->set_x(-2.0);
+  grpc::ClientContext update_context;
+  v1::UpdatePosesResponse updated;
+  ASSERT_TRUE(stub_->UpdatePoses(&update_context, update, &updated).ok());
+  ASSERT_TRUE(list(3, 0, &page).ok());
+  ASSERT_EQ(page.keyframes_size(), 1);
+  EXPECT_DOUBLE_EQ(page.keyframes(0).t_w_c().translation().x(), -2.0);
+
+  const grpc::Status negative = list(0, -1, &page);
+  EXPECT_EQ(negative.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(negative.error_message(), "max_results -1 must be >= 0 (0: all)");
+  const grpc::Status bad_id = list(-4, 0, &page);
+  EXPECT_EQ(bad_id.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(bad_id.error_message(), "first_id -4 must be >= 0");
+}
+
 TEST_F(MapServiceTest, IngestStopsAtTheFirstBadKeyframeAndKeepsTheOnesBefore) {
   grpc::ClientContext context;
   v1::IngestSummary summary;

@@ -198,11 +198,28 @@ TEST_F(MapServerScene, PoseUpdateMovesObjectsAndOccupancy) {
   RegionOccupancy counts;
   std::uint64_t version = 0;
   const Eigen::Vector3d air_min(-0.5, -0.1, 1.0), air_max(-0.4, 0.0, 1.1);
-  ASSERT_TRUE(server->IsFree(air_min, air_max, false, &free, &counts, &version).ok());
+  ASSERT_TRUE(server->IsFree(air_min, air_max, false, &free, &counts, nullptr, &version).ok());
   EXPECT_TRUE(free) << counts.occupied << " occupied, " << counts.unknown << " unknown";
   const Eigen::Vector3d table_min(-0.3, -0.05, 0.68), table_max(-0.2, 0.05, 0.72);
-  ASSERT_TRUE(server->IsFree(table_min, table_max, false, &free, &counts, &version).ok());
+  ASSERT_TRUE(server->IsFree(table_min, table_max, false, &free, &counts, nullptr, &version).ok());
   EXPECT_FALSE(free);
+  // Cups are objects, not OctoMap voxels: a box around one is not free even for a planner that
+  // takes unknown space as free, and the answer names the cup.
+  std::vector<ObjectId> objects_inside;
+  ASSERT_TRUE(server->IsFree(boxes_[1].lo - Eigen::Vector3d::Constant(0.01),
+                             boxes_[1].hi + Eigen::Vector3d::Constant(0.01), true, &free, &counts,
+                             &objects_inside, &version)
+                  .ok());
+  EXPECT_FALSE(free);
+  ASSERT_EQ(objects_inside.size(), 1u);
+  EXPECT_LT(before[0]->centroid_W.y() * before[1]->centroid_W.y(), 0.f);  // one cup each side
+  const ObjectId cup_at_negative_y =
+      before[0]->centroid_W.y() < 0.f ? before[0]->id : before[1]->id;
+  EXPECT_EQ(objects_inside[0], cup_at_negative_y);
+  ASSERT_TRUE(server->IsFree(air_min, air_max, true, &free, &counts, &objects_inside, &version)
+                  .ok());
+  EXPECT_TRUE(free);
+  EXPECT_TRUE(objects_inside.empty());
 
   Eigen::Isometry3d G = Eigen::Isometry3d::Identity();  // a rigid correction of every pose
   G.translate(Eigen::Vector3d(0.5, -0.3, 0.1));
@@ -221,7 +238,7 @@ TEST_F(MapServerScene, PoseUpdateMovesObjectsAndOccupancy) {
       RegionOccupancy c;
       const bool regenerating = server->Status().regenerating;
       if (server->QueryObjects(ObjectFilter{}, &found, &v).ok() &&
-          server->IsFree(air_min, air_max, false, &f, &c, &v).ok() && regenerating) {
+          server->IsFree(air_min, air_max, false, &f, &c, nullptr, &v).ok() && regenerating) {
         ++answered_while_regenerating;
       }
     }
@@ -247,7 +264,7 @@ TEST_F(MapServerScene, PoseUpdateMovesObjectsAndOccupancy) {
   const Eigen::Vector3d moved_table = G * Eigen::Vector3d(-0.25, 0.0, 0.70);
   ASSERT_TRUE(server->IsFree(moved_table - Eigen::Vector3d::Constant(0.03),
                              moved_table + Eigen::Vector3d::Constant(0.03), false, &free, &counts,
-                             &version)
+                             nullptr, &version)
                   .ok());
   EXPECT_GT(counts.occupied, 0u);
 

@@ -65,6 +65,8 @@ class MapClient {
                            v1::AddKeyframeResponse* response);
   grpc::Status UpdatePoses(const v1::UpdatePosesRequest& request,
                            v1::UpdatePosesResponse* response);
+  grpc::Status ListKeyframes(const v1::ListKeyframesRequest& request,
+                             v1::ListKeyframesResponse* response);
   grpc::Status QueryObjects(const v1::QueryObjectsRequest& request,
                             v1::QueryObjectsResponse* response);
   grpc::Status GetObject(const v1::GetObjectRequest& request, v1::Object* response);

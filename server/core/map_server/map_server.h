@@ -190,9 +190,13 @@ class MapServer {
                                              const Eigen::Vector3d& max_W, double resolution_m,
                                              bool list_voxels, std::size_t max_voxels,
                                              RegionOccupancy* region, std::uint64_t* version) const;
-  /// True when the box has no occupied voxel and (unless `unknown_is_free`) no unknown one.
+  /// True when the box holds no occupied voxel, no point of an object model and (unless
+  /// `unknown_is_free`) no unknown voxel. Objects are not in the OctoMap (their rays stop short
+  /// of them), so their 5 mm models are what keeps a box around a cup or a table top from being
+  /// free. `objects_inside` (may be null) receives the ids of those objects, ascending.
   [[nodiscard]] ServiceStatus IsFree(const Eigen::Vector3d& min_W, const Eigen::Vector3d& max_W,
                                      bool unknown_is_free, bool* free, RegionOccupancy* counts,
+                                     std::vector<ObjectId>* objects_inside,
                                      std::uint64_t* version) const;
   [[nodiscard]] ServiceStatus CastRay(const Eigen::Vector3d& origin_W,
                                       const Eigen::Vector3d& direction_W, double max_range_m,
@@ -203,6 +207,13 @@ class MapServer {
                                                                          Eigen::Vector3d>>& region,
                                            std::string* bytes, std::size_t* leaf_count,
                                            std::uint64_t* version) const;
+
+  /// Stored keyframes with id >= `first_id`, ascending, at most `max_count` (0: all), with their
+  /// current poses: what a pose-graph back end needs to resume after a restart. `version` is the
+  /// map version before the read; every keyframe of that version is listed (later ones may be).
+  [[nodiscard]] ServiceStatus ListKeyframes(KeyframeId first_id, std::size_t max_count,
+                                            std::vector<KeyframeSummary>* keyframes,
+                                            std::uint64_t* version) const;
 
   [[nodiscard]] ServerStatus Status() const;
 

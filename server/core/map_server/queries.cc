@@ -15,6 +15,13 @@ bool InBox(const Eigen::Vector3f& p, const Eigen::Vector3d& min_W, const Eigen::
 
 bool IsFiniteVector(const Eigen::Vector3d& v) { return v.allFinite(); }
 
+// Closed boxes [a_min, a_max] and [b_min, b_max] share a point.
+bool BoxesOverlap(const Eigen::Vector3f& a_min, const Eigen::Vector3f& a_max,
+                  const Eigen::Vector3d& b_min, const Eigen::Vector3d& b_max) {
+  return (a_min.cast<double>().array() <= b_max.array()).all() &&
+         (b_min.array() <= a_max.cast<double>().array()).all();
+}
+
 }  // namespace
 
 bool ValidateBox(const Eigen::Vector3d& min_W, const Eigen::Vector3d& max_W,
@@ -142,10 +149,23 @@ ServiceStatus MapServer::QueryOccupancy(const Eigen::Vector3d& min_W, const Eige
 
 ServiceStatus MapServer::IsFree(const Eigen::Vector3d& min_W, const Eigen::Vector3d& max_W,
                                 bool unknown_is_free, bool* free, RegionOccupancy* counts,
+                                std::vector<ObjectId>* objects_inside,
                                 std::uint64_t* version) const {
+  // The snapshot is taken first: objects of this version or later, never of an older one.
+  const std::shared_ptr<const MapSnapshot> snapshot = impl_->Current();
   ServiceStatus status = QueryOccupancy(min_W, max_W, 0.0, false, 0, counts, version);
   if (!status.ok()) return status;
-  *free = counts->occupied == 0 && (unknown_is_free || counts->unknown == 0);
+  std::vector<ObjectId> inside;
+  for (const auto& [id, view] : snapshot->objects) {
+    if (!BoxesOverlap(view->min_W, view->max_W, min_W, max_W) || !view->model_W) continue;
+    const auto& points = view->model_W->points;
+    if (std::any_of(points.begin(), points.end(),
+                    [&](const Eigen::Vector3f& p) { return InBox(p, min_W, max_W); })) {
+      inside.push_back(id);
+    }
+  }
+  *free = counts->occupied == 0 && inside.empty() && (unknown_is_free || counts->unknown == 0);
+  if (objects_inside != nullptr) *objects_inside = std::move(inside);
   return status;
 }
 
@@ -179,6 +199,20 @@ ServiceStatus MapServer::OctomapBytes(
     *bytes = map.BinaryBytes(region.has_value(), region ? region->first : zero,
                              region ? region->second : zero, leaf_count);
   });
+  return ServiceStatus::Ok();
+}
+
+ServiceStatus MapServer::ListKeyframes(KeyframeId first_id, std::size_t max_count,
+                                       std::vector<KeyframeSummary>* keyframes,
+                                       std::uint64_t* version) const {
+  if (first_id < 0) {
+    return ServiceStatus::Invalid("first_id " + std::to_string(first_id) + " must be >= 0");
+  }
+  *version = impl_->Current()->version;
+  std::string why;
+  if (!impl_->store->ListKeyframes(first_id, max_count, keyframes, &why)) {
+    return {StatusCode::kInternal, "keyframes not read: " + why};
+  }
   return ServiceStatus::Ok();
 }
 

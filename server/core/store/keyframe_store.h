@@ -32,6 +32,14 @@ struct StoredKeyframe {
   std::vector<Detection> detections;
 };
 
+/// A keyframe without its images: what ListKeyframes returns.
+struct KeyframeSummary {
+  KeyframeId id = 0;
+  double stamp_s = 0.0;
+  std::string name;
+  Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();  ///< the current (last stored) pose
+};
+
 /// One observation of one object (see ObjectObservation), with the object that holds it.
 struct StoredObservation {
   ObjectId object_id = 0;
@@ -111,6 +119,11 @@ class KeyframeStore {
   [[nodiscard]] bool LoadAll(StoredMap* map, std::string* why) const;
   /// Loads one keyframe; false with "unknown keyframe id N" when absent.
   [[nodiscard]] bool LoadKeyframe(KeyframeId id, StoredKeyframe* keyframe, std::string* why) const;
+
+  /// Keyframes with id >= `first_id`, ascending, at most `max_count` of them (0: all), with their
+  /// current poses; no image is read. False with a reason when the store cannot be read.
+  [[nodiscard]] bool ListKeyframes(KeyframeId first_id, std::size_t max_count,
+                                   std::vector<KeyframeSummary>* keyframes, std::string* why) const;
 
   [[nodiscard]] std::size_t NumKeyframes() const;
   /// Bytes of the database file plus its WAL.

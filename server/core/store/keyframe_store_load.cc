@@ -212,4 +212,32 @@ bool KeyframeStore::LoadKeyframe(KeyframeId id, StoredKeyframe* keyframe, std::s
   return true;
 }
 
+bool KeyframeStore::ListKeyframes(KeyframeId first_id, std::size_t max_count,
+                                  std::vector<KeyframeSummary>* keyframes, std::string* why) const {
+  keyframes->clear();
+  auto reader = impl_->readers->Acquire(why);
+  if (!reader) return false;
+  // LIMIT -1 is SQLite's "no limit".
+  auto rows = reader.get()->Prepare(
+      "SELECT id, stamp_s, name, T_W_C FROM keyframes WHERE id >= ? ORDER BY id LIMIT ?",
+      "list keyframes", why);
+  if (!rows) return false;
+  rows->Bind(1, std::int64_t{first_id});
+  rows->Bind(2, max_count == 0 ? std::int64_t{-1} : static_cast<std::int64_t>(max_count));
+  for (bool has_row = true;;) {
+    if (!rows->Step(&has_row, why)) return false;
+    if (!has_row) return true;
+    KeyframeSummary& summary = keyframes->emplace_back();
+    summary.id = rows->Int64(0);
+    summary.stamp_s = rows->Double(1);
+    summary.name = rows->Text(2);
+    std::size_t pose_bytes = 0;
+    const std::uint8_t* pose = rows->Blob(3, &pose_bytes);
+    if (!store_internal::UnpackPose(pose, pose_bytes, &summary.T_W_C)) {
+      *why = impl_->path + ": keyframe " + std::to_string(summary.id) + ": corrupt pose blob";
+      return false;
+    }
+  }
+}
+
 }  // namespace objmap
