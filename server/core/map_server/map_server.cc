@@ -96,6 +96,10 @@ std::shared_ptr<const MapSnapshot> MapServer::Snapshot() const { return impl_->C
 
 ServiceStatus MapServer::Impl::Enqueue(std::shared_ptr<MapJob> job, bool bounded) {
   std::lock_guard<std::mutex> lock(queue_mutex);
+  return EnqueueLocked(std::move(job), bounded);
+}
+
+ServiceStatus MapServer::Impl::EnqueueLocked(std::shared_ptr<MapJob> job, bool bounded) {
   if (stopping) return {StatusCode::kUnavailable, "the server is shutting down"};
   if (bounded && static_cast<int>(queue.size()) >= config.max_queue) {
     return {StatusCode::kResourceExhausted,
@@ -270,17 +274,25 @@ ServiceStatus MapServer::UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3
       return ServiceStatus::Invalid("poses[keyframe " + std::to_string(id) + "]: " + why);
     }
   }
-  // Durable before acknowledging: a restart regenerates with these poses.
-  StoreChange change;
-  change.poses = poses;
-  std::string why;
-  if (!impl_->store->Commit(change, &why)) return {StatusCode::kInternal, "poses not stored: " + why};
   auto job = std::make_shared<MapJob>();
   job->kind = MapJob::Kind::kPoses;
   job->poses = poses;
   std::future<MapJob::Result> done = job->done.get_future();
-  ServiceStatus queued = impl_->Enqueue(job, /*bounded=*/false);
-  if (!queued.ok()) return queued;
+  {
+    // Durable before acknowledging (a restart regenerates with these poses), and stored and
+    // queued under the queue lock, so that a shutdown cannot fall between the two: poses the
+    // caller is told were refused are never stored.
+    std::lock_guard<std::mutex> lock(impl_->queue_mutex);
+    if (impl_->stopping) return {StatusCode::kUnavailable, "the server is shutting down"};
+    StoreChange change;
+    change.poses = poses;
+    std::string why;
+    if (!impl_->store->Commit(change, &why)) {
+      return {StatusCode::kInternal, "poses not stored: " + why};
+    }
+    ServiceStatus queued = impl_->EnqueueLocked(job, /*bounded=*/false);
+    if (!queued.ok()) return queued;
+  }
   *outcome = PoseUpdateOutcome{};
   outcome->map_version = job->version;
   if (!wait) return ServiceStatus::Ok();

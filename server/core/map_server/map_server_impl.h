@@ -75,6 +75,8 @@ struct MapServer::Impl {
   MapJob::Result ApplyPoses(MapJob* job);
   void Publish(std::shared_ptr<const MapSnapshot> next, MapChange change);
   ServiceStatus Enqueue(std::shared_ptr<MapJob> job, bool bounded);
+  /// Enqueue with queue_mutex already held by the caller.
+  ServiceStatus EnqueueLocked(std::shared_ptr<MapJob> job, bool bounded);
   [[nodiscard]] std::shared_ptr<const MapSnapshot> Current() const;
 };
 
