@@ -181,16 +181,18 @@ grpc::Status MapServiceImpl::RayCast(grpc::ServerContext* /*context*/,
     const double max_range_m =
         request->max_range() == 0.0 ? kDefaultRayRangeM : request->max_range();
     RayHit hit;
+    ObjectId object_hit = 0;
     std::uint64_t version = 0;
-    const grpc::Status status = ToGrpcStatus(
-        server_.CastRay(Vec3FromProto(request->origin()), Vec3FromProto(request->direction()),
-                        max_range_m, request->unknown_stops(), &hit, &version));
+    const grpc::Status status = ToGrpcStatus(server_.CastRay(
+        Vec3FromProto(request->origin()), Vec3FromProto(request->direction()), max_range_m,
+        request->unknown_stops(), &hit, &object_hit, &version));
     if (!status.ok()) return status;
     response->set_hit(hit.hit);
     if (hit.hit) {
       *response->mutable_hit_point() = Vec3ToProto(hit.voxel_center_W);
       response->set_hit_state(VoxelStateToProto(hit.state));
       response->set_distance(hit.distance_m);
+      response->set_object_id(object_hit);
     }
     response->set_map_version(version);
     return status;

@@ -121,6 +121,25 @@ TEST_F(MapServerScene, QueriesByClassRegionAndNearest) {
   EXPECT_EQ(missing.code, StatusCode::kNotFound);
   EXPECT_NE(missing.message.find("999"), std::string::npos);
 
+  // A ray from the first camera towards a cup stops at the cup (an object, not in the OctoMap);
+  // one that passes beside the cups stops at the table top (structure).
+  const Eigen::Vector3d eye = eyes_[0];
+  const Eigen::Vector3d cup_centre = 0.5 * (boxes_[1].lo + boxes_[1].hi);
+  RayHit hit;
+  ObjectId object_hit = -1;
+  ASSERT_TRUE(server->CastRay(eye, cup_centre - eye, 5.0, false, &hit, &object_hit, &version).ok());
+  EXPECT_TRUE(hit.hit);
+  EXPECT_EQ(hit.state, VoxelState::kOccupied);
+  EXPECT_EQ(object_hit, found[0]->id);  // the cup at y < 0, found by the nearest query above
+  // The cup's near face is at x = -0.05; the ray meets it about 0.95 m along from the eye.
+  EXPECT_NEAR(hit.voxel_center_W.x(), -0.05, 0.015);
+  const Eigen::Vector3d table_point(-0.3, 0.0, 0.70);
+  ASSERT_TRUE(
+      server->CastRay(eye, table_point - eye, 5.0, false, &hit, &object_hit, &version).ok());
+  EXPECT_TRUE(hit.hit);
+  EXPECT_EQ(object_hit, 0);
+  EXPECT_NEAR(hit.voxel_center_W.z(), 0.70, 0.015);
+
   std::vector<InventoryEntry> inventory;
   ASSERT_TRUE(server->Inventory(std::nullopt, &inventory, &version).ok());
   ASSERT_EQ(inventory.size(), 1u);

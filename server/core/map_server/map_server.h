@@ -198,9 +198,12 @@ class MapServer {
                                      bool unknown_is_free, bool* free, RegionOccupancy* counts,
                                      std::vector<ObjectId>* objects_inside,
                                      std::uint64_t* version) const;
+  /// The first occupied voxel (or unknown one, with `unknown_stops`) on the ray, or the first
+  /// point of an object model, whichever comes first; `object_hit` is that object's id (0 when
+  /// the structure or nothing was hit).
   [[nodiscard]] ServiceStatus CastRay(const Eigen::Vector3d& origin_W,
                                       const Eigen::Vector3d& direction_W, double max_range_m,
-                                      bool unknown_stops, RayHit* hit,
+                                      bool unknown_stops, RayHit* hit, ObjectId* object_hit,
                                       std::uint64_t* version) const;
   /// The OctoMap (or the part in the box) as standard .bt bytes.
   [[nodiscard]] ServiceStatus OctomapBytes(const std::optional<std::pair<Eigen::Vector3d,

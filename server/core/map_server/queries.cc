@@ -15,6 +15,26 @@ bool InBox(const Eigen::Vector3f& p, const Eigen::Vector3d& min_W, const Eigen::
 
 bool IsFiniteVector(const Eigen::Vector3d& v) { return v.allFinite(); }
 
+// The ray origin + t * direction (unit) meets the box [box_min, box_max] for some t in
+// [0, max_t] (slab test).
+bool RayMeetsBox(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                 const Eigen::Vector3d& box_min, const Eigen::Vector3d& box_max, double max_t) {
+  double t_enter = 0.0, t_exit = max_t;
+  for (int axis = 0; axis < 3; ++axis) {
+    if (std::abs(direction[axis]) < 1e-12) {
+      if (origin[axis] < box_min[axis] || origin[axis] > box_max[axis]) return false;
+      continue;
+    }
+    double t0 = (box_min[axis] - origin[axis]) / direction[axis];
+    double t1 = (box_max[axis] - origin[axis]) / direction[axis];
+    if (t0 > t1) std::swap(t0, t1);
+    t_enter = std::max(t_enter, t0);
+    t_exit = std::min(t_exit, t1);
+    if (t_enter > t_exit) return false;
+  }
+  return true;
+}
+
 // Closed boxes [a_min, a_max] and [b_min, b_max] share a point.
 bool BoxesOverlap(const Eigen::Vector3f& a_min, const Eigen::Vector3f& a_max,
                   const Eigen::Vector3d& b_min, const Eigen::Vector3d& b_max) {
@@ -171,7 +191,8 @@ ServiceStatus MapServer::IsFree(const Eigen::Vector3d& min_W, const Eigen::Vecto
 
 ServiceStatus MapServer::CastRay(const Eigen::Vector3d& origin_W,
                                  const Eigen::Vector3d& direction_W, double max_range_m,
-                                 bool unknown_stops, RayHit* hit, std::uint64_t* version) const {
+                                 bool unknown_stops, RayHit* hit, ObjectId* object_hit,
+                                 std::uint64_t* version) const {
   if (!IsFiniteVector(origin_W)) return ServiceStatus::Invalid("origin: coordinates must be finite");
   if (!IsFiniteVector(direction_W) || direction_W.norm() < 1e-9) {
     return ServiceStatus::Invalid("direction must be finite and non-zero");
@@ -179,10 +200,37 @@ ServiceStatus MapServer::CastRay(const Eigen::Vector3d& origin_W,
   if (!std::isfinite(max_range_m) || max_range_m <= 0.0 || max_range_m > 1000.0) {
     return ServiceStatus::Invalid("max_range must be in (0, 1000] metres");
   }
-  *version = impl_->Current()->version;
+  const std::shared_ptr<const MapSnapshot> snapshot = impl_->Current();
+  *version = snapshot->version;
   impl_->mapper->ReadOccupancy([&](const OccupancyMap& map) {
     *hit = map.CastRay(origin_W, direction_W, max_range_m, unknown_stops);
   });
+  // Objects are not in the OctoMap: the ray also stops at the first model point it passes
+  // within half a model voxel diagonal of, when that comes before the structure's voxel.
+  const Eigen::Vector3d direction = direction_W.normalized();
+  const double radius =
+      0.5 * std::sqrt(3.0) * impl_->config.mapper.objects.model_voxel_size_m;
+  double reach = hit->hit ? hit->distance_m : max_range_m;
+  *object_hit = 0;
+  for (const auto& [id, view] : snapshot->objects) {
+    if (!view->model_W ||
+        !RayMeetsBox(origin_W, direction, view->min_W.cast<double>().array() - radius,
+                     view->max_W.cast<double>().array() + radius, reach)) {
+      continue;
+    }
+    for (const Eigen::Vector3f& point : view->model_W->points) {
+      const Eigen::Vector3d offset = point.cast<double>() - origin_W;
+      const double along = offset.dot(direction);
+      if (along < 0.0 || along >= reach) continue;
+      if ((offset - along * direction).squaredNorm() > radius * radius) continue;
+      reach = along;
+      *object_hit = id;
+      hit->hit = true;
+      hit->state = VoxelState::kOccupied;
+      hit->voxel_center_W = point.cast<double>();
+      hit->distance_m = along;
+    }
+  }
   return ServiceStatus::Ok();
 }
 
