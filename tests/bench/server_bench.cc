@@ -1,0 +1,301 @@
+// The map server under load, over real gRPC on 127.0.0.1 with a real SQLite file: latency of
+// class, region and occupancy queries with the server idle and while keyframes are ingested,
+// regeneration time after a pose-graph update against the number of keyframes, and bytes stored
+// per keyframe. Keyframes of a recorded sequence go through the server's CenterNet detector
+// (as `objmap ingest` sends them); without the model the map has no objects and the bench says so.
+//   server_bench [sequence=../shared/data/redkitchen] [keyframes=68] [query_rounds=300]
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <unistd.h>
+#include <vector>
+
+#include "dataset/keyframe_selector.h"
+#include "dataset/sequence_reader.h"
+#include "detection/centernet_detector.h"
+#include "grpc_service/grpc_server.h"
+#include "grpc_service/map_service.h"
+#include "map_server/map_server.h"
+#include "objmap/client.h"
+#include "objmap/conversions.h"
+#include "store/keyframe_store.h"
+
+namespace objmap {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double Ms(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+double Percentile(std::vector<double> values, double p) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const std::size_t index = std::min(values.size() - 1,
+                                     static_cast<std::size_t>(p * (values.size() - 1) + 0.5));
+  return values[index];
+}
+
+v1::Box MakeBox(const Eigen::Vector3d& min_W, const Eigen::Vector3d& max_W) {
+  v1::Box box;
+  *box.mutable_min() = Vec3ToProto(min_W);
+  *box.mutable_max() = Vec3ToProto(max_W);
+  return box;
+}
+
+// The query kinds measured, each one RPC.
+enum Query { kClass, kObjectRegion, kIsFree, kOccupancyCounts, kNumQueries };
+const char* const kQueryNames[kNumQueries] = {
+    "QueryObjects by class (cup)", "QueryObjects by region (1 m box)",
+    "IsFree (20 cm box)", "QueryOccupancy counts (1 m box, 1 cm)"};
+
+struct Latencies {
+  std::mutex mutex;
+  std::vector<double> ms[kNumQueries];
+};
+
+class QueryLoad {
+ public:
+  QueryLoad(MapClient* client, const Eigen::Vector3d& centre) : client_(client) {
+    class_.set_class_name("cup");
+    *region_.mutable_region() = MakeBox(centre - Eigen::Vector3d::Constant(0.5),
+                                        centre + Eigen::Vector3d::Constant(0.5));
+    *is_free_.mutable_region() = MakeBox(centre - Eigen::Vector3d::Constant(0.1),
+                                         centre + Eigen::Vector3d::Constant(0.1));
+    *occupancy_.mutable_region() = region_.region();
+  }
+
+  // One query of the kind; its latency in ms, negative when it failed.
+  double Run(Query kind) {
+    const auto start = Clock::now();
+    bool ok = false;
+    if (kind == kClass) {
+      v1::QueryObjectsResponse response;
+      ok = client_->QueryObjects(class_, &response).ok();
+    } else if (kind == kObjectRegion) {
+      v1::QueryObjectsResponse response;
+      ok = client_->QueryObjects(region_, &response).ok();
+    } else if (kind == kIsFree) {
+      v1::IsFreeResponse response;
+      ok = client_->IsFree(is_free_, &response).ok();
+    } else {
+      v1::QueryOccupancyResponse response;
+      ok = client_->QueryOccupancy(occupancy_, &response).ok();
+    }
+    return ok ? Ms(start) : -1.0;
+  }
+
+ private:
+  MapClient* client_;
+  v1::QueryObjectsRequest class_, region_;
+  v1::IsFreeRequest is_free_;
+  v1::QueryOccupancyRequest occupancy_;
+};
+
+void PrintLatencies(const char* title, Latencies* latencies) {
+  std::printf("\n%s\n| query | n | p50 ms | p99 ms |\n|---|---|---|---|\n", title);
+  for (int q = 0; q < kNumQueries; ++q) {
+    std::printf("| %s | %zu | %.2f | %.2f |\n", kQueryNames[q], latencies->ms[q].size(),
+                Percentile(latencies->ms[q], 0.5), Percentile(latencies->ms[q], 0.99));
+  }
+}
+
+}  // namespace
+}  // namespace objmap
+
+int main(int argc, char** argv) {
+  using namespace objmap;
+  const std::string path = argc > 1 ? argv[1] : "../shared/data/redkitchen";
+  const int wanted_keyframes = argc > 2 ? std::atoi(argv[2]) : 68;
+  const int query_rounds = argc > 3 ? std::atoi(argv[3]) : 300;
+  std::string why;
+
+  // Keyframes as `objmap ingest` selects and encodes them (JPEG colour).
+  std::unique_ptr<SequenceReader> reader = OpenSequence(path, &why);
+  if (!reader) {
+    std::fprintf(stderr, "server_bench: %s\n", why.c_str());
+    return 1;
+  }
+  KeyframeSelector selector{KeyframeSelectorConfig{}};
+  KeyframeEncoding encoding;
+  encoding.color = KeyframeEncoding::Color::kJpeg;
+  std::vector<RgbdFrame> frames;
+  for (std::size_t i = 0; i < reader->size() && static_cast<int>(frames.size()) < wanted_keyframes;
+       ++i) {
+    RgbdFrame frame;
+    if (!reader->ReadFrame(i, &frame, &why)) {
+      std::fprintf(stderr, "server_bench: %s\n", why.c_str());
+      return 1;
+    }
+    if (selector.IsKeyframe(frame.T_W_C)) frames.push_back(std::move(frame));
+  }
+  const int num_keyframes = static_cast<int>(frames.size());
+
+  // The server in this process: MapServer on a fresh SQLite file behind gRPC on loopback.
+  const fs::path db = fs::temp_directory_path() / ("objmap_server_bench_" + std::to_string(getpid()) + ".db");
+  CenterNetConfig detector_config;
+  detector_config.model_path = OBJMAP_DEFAULT_MODEL_PATH;
+  std::unique_ptr<Detector> detector;
+  if (fs::exists(detector_config.model_path)) {
+    detector = MakeCenterNetDetector(detector_config, &why);
+  } else {
+    std::printf("NOTE: no detector model at %s: the map will have no objects\n",
+                detector_config.model_path.c_str());
+  }
+  std::unique_ptr<MapServer> map_server =
+      MapServer::Open(MapServerConfig{}, db.string(), std::move(detector), &why);
+  if (!map_server) {
+    std::fprintf(stderr, "server_bench: %s\n", why.c_str());
+    return 1;
+  }
+  grpc_service::MapServiceImpl service(*map_server);
+  grpc_service::GrpcServerOptions grpc_options;
+  grpc_options.listen_address = "127.0.0.1:0";
+  int port = 0;
+  std::unique_ptr<grpc::Server> grpc_server =
+      grpc_service::StartGrpcServer(grpc_options, &service, &port, &why);
+  if (!grpc_server) {
+    std::fprintf(stderr, "server_bench: %s\n", why.c_str());
+    return 1;
+  }
+  MapClientOptions client_options;
+  client_options.deadline_s = 600.0;
+  MapClient client(grpc_service::AddressWithPort(grpc_options.listen_address, port),
+                   client_options);
+  std::printf("server_bench: %s, %d keyframes, %d query rounds, database %s\n",
+              reader->Describe().c_str(), num_keyframes, query_rounds, db.c_str());
+
+  // Every later keyframe is sent with the correction of the pose updates so far, so that the
+  // map stays consistent after each regeneration.
+  Eigen::Isometry3d correction = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d step = Eigen::Isometry3d::Identity();
+  step.translate(Eigen::Vector3d(0.05, -0.02, 0.01));
+  step.rotate(Eigen::AngleAxisd(0.02, Eigen::Vector3d::UnitY()));
+
+  std::vector<double> ack_ms;
+  int added = 0;
+  auto add_until = [&](int count) {
+    for (; added < count; ++added) {
+      RgbdFrame frame = frames[added];
+      frame.T_W_C = correction * frame.T_W_C;
+      v1::AddKeyframeResponse response;
+      const auto start = Clock::now();
+      const grpc::Status status = client.AddKeyframe(frame, nullptr, &response);
+      if (!status.ok()) {
+        std::fprintf(stderr, "server_bench: keyframe %d: %s\n", added,
+                     DescribeStatus(status).c_str());
+        std::exit(1);
+      }
+      ack_ms.push_back(Ms(start));
+    }
+  };
+  struct RegenerationPoint {
+    int keyframes;
+    double ms;
+  };
+  std::vector<RegenerationPoint> regenerations;
+  auto regenerate_all = [&] {
+    v1::ListKeyframesResponse listed;
+    if (!client.ListKeyframes(v1::ListKeyframesRequest(), &listed).ok()) std::exit(1);
+    v1::UpdatePosesRequest update;
+    update.set_wait(true);
+    for (const v1::KeyframeInfo& info : listed.keyframes()) {
+      Eigen::Isometry3d T_W_C;
+      if (!PoseFromProto(info.t_w_c(), &T_W_C, &why)) std::exit(1);
+      v1::KeyframePose* pose = update.add_poses();
+      pose->set_keyframe_id(info.id());
+      *pose->mutable_t_w_c() = PoseToProto(step * T_W_C);
+    }
+    v1::UpdatePosesResponse updated;
+    const grpc::Status status = client.UpdatePoses(update, &updated);
+    if (!status.ok()) {
+      std::fprintf(stderr, "server_bench: UpdatePoses: %s\n", DescribeStatus(status).c_str());
+      std::exit(1);
+    }
+    correction = step * correction;
+    regenerations.push_back({listed.keyframes_size(), updated.regeneration_ms()});
+  };
+
+  // Regeneration after 1/8, 1/4, 1/2 and all of the keyframes; idle queries at the half.
+  const int half = num_keyframes / 2;
+  for (int count : {num_keyframes / 8, num_keyframes / 4, half}) {
+    add_until(count);
+    regenerate_all();
+  }
+  const Eigen::Vector3d centre = correction * frames[0].T_W_C * Eigen::Vector3d(0, 0, 1.0);
+  QueryLoad queries(&client, centre);
+  Latencies idle;
+  for (int round = 0; round < query_rounds; ++round) {
+    for (int q = 0; q < kNumQueries; ++q) idle.ms[q].push_back(queries.Run(static_cast<Query>(q)));
+  }
+
+  // The second half of the keyframes while a client queries in a loop.
+  Latencies loaded;
+  std::atomic<bool> ingesting{true};
+  std::atomic<int> failed{0};
+  std::thread query_thread([&] {
+    QueryLoad load(&client, centre);
+    for (int q = 0; ingesting; q = (q + 1) % kNumQueries) {
+      const double ms = load.Run(static_cast<Query>(q));
+      if (ms < 0) {
+        ++failed;
+        continue;
+      }
+      std::lock_guard<std::mutex> lock(loaded.mutex);
+      loaded.ms[q].push_back(ms);
+    }
+  });
+  const std::size_t acks_before = ack_ms.size();
+  add_until(num_keyframes);
+  ingesting = false;
+  query_thread.join();
+  regenerate_all();
+
+  // Bytes per keyframe, read through a second connection to the same file.
+  std::unique_ptr<KeyframeStore> store = KeyframeStore::Open(db.string(), KeyframeStoreConfig{}, &why);
+  KeyframeStore::KeyframeBytes sum;
+  for (KeyframeId id = 1; id <= num_keyframes && store; ++id) {
+    const KeyframeStore::KeyframeBytes bytes = store->BytesOf(id);
+    sum.depth += bytes.depth, sum.mask += bytes.mask, sum.color += bytes.color;
+    sum.observations += bytes.observations, sum.total += bytes.total;
+  }
+  const ServerStatus status = map_server->Status();
+
+  PrintLatencies("Queries, server idle (map of half the keyframes):", &idle);
+  PrintLatencies("Queries while the second half is ingested (one query client):", &loaded);
+  if (failed > 0) std::printf("FAILED queries during ingest: %d\n", failed.load());
+  const std::vector<double> loaded_acks(ack_ms.begin() + acks_before, ack_ms.end());
+  std::printf("\nAddKeyframe acknowledgement (detector, mapping, store commit): p50 %.0f ms, "
+              "p99 %.0f ms over %zu keyframes\n",
+              Percentile(ack_ms, 0.5), Percentile(ack_ms, 0.99), ack_ms.size());
+  std::printf("\nRegeneration after a pose update of every keyframe\n"
+              "| keyframes | regeneration ms | ms per keyframe |\n|---|---|---|\n");
+  for (const RegenerationPoint& point : regenerations) {
+    std::printf("| %d | %.0f | %.0f |\n", point.keyframes, point.ms, point.ms / point.keyframes);
+  }
+  const double n = std::max(1, num_keyframes);
+  std::printf("\nStored per keyframe (mean of %d): depth PNG %.0f kB, object mask PNG %.0f kB, "
+              "colour JPEG %.0f kB, observations %.0f kB, total %.0f kB; database file %.1f MB "
+              "(%.0f kB per keyframe)\n",
+              num_keyframes, sum.depth / n / 1e3, sum.mask / n / 1e3, sum.color / n / 1e3,
+              sum.observations / n / 1e3, sum.total / n / 1e3, status.database_bytes / 1e6,
+              status.database_bytes / n / 1e3);
+  std::printf("map: %zu keyframes, %zu objects (%zu confirmed), version %llu\n", status.keyframes,
+              status.objects, status.confirmed_objects,
+              static_cast<unsigned long long>(status.map_version));
+
+  map_server->Shutdown();
+  grpc_server->Shutdown();
+  store.reset();
+  map_server.reset();
+  for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(db.string() + suffix);
+  return 0;
+}
