@@ -89,6 +89,23 @@ TEST(OccupancyMap, WallIsOccupiedAndTheSpaceBeforeItFree) {
   EXPECT_GT(map.Counts().free, 100000u);
 }
 
+TEST(OccupancyMap, PreparedScanLeavesTheTreeAloneUntilApplied) {
+  OccupancyMap whole(TestConfig()), in_steps(TestConfig());
+  const ScanW first = WallScan(2.005, 0.3), second = WallScan(1.505, 0.2);
+  whole.Integrate(first);
+  whole.Integrate(second);
+  in_steps.Integrate(first);
+  const OccupancyCounts before = in_steps.Counts();
+  in_steps.PrepareScan(second);
+  // Casting the rays does not touch the OcTree, which readers may be reading meanwhile.
+  EXPECT_EQ(in_steps.Counts().occupied, before.occupied);
+  EXPECT_EQ(in_steps.Counts().free, before.free);
+  in_steps.ApplyPreparedScan();
+  EXPECT_EQ(in_steps.Counts().occupied, whole.Counts().occupied);
+  EXPECT_EQ(in_steps.Counts().free, whole.Counts().free);
+  EXPECT_NE(in_steps.Counts().occupied, before.occupied);
+}
+
 TEST(OccupancyMap, MaxRangeTruncatesFreeSpaceAndDropsTheEndpoint) {
   OccupancyConfig config = TestConfig();
   config.max_range_m = 1.0;

@@ -146,7 +146,7 @@ struct ServerStatus {
 /// UpdatePoses) are queued and applied by the mapping thread in order; they return once the
 /// change is committed to the store (AddKeyframe) or the new poses are (UpdatePoses). Queries
 /// read the latest snapshot and never wait for a regeneration; occupancy queries wait at most
-/// for one keyframe's OctoMap update.
+/// for the OcTree write of one keyframe (its ray casting runs beside them).
 class MapServer {
  public:
   /// Opens (or creates) the store at `db_path` and rebuilds the map from it: same keyframe and

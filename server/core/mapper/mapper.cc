@@ -202,10 +202,12 @@ bool Mapper::AddKeyframe(const RgbdFrame& frame, const std::vector<Detection>& d
   result->timings.association_ms = MillisecondsSince(start);
 
   start = Clock::now();
-  const ScanW scan = ToScan(record);
+  // Rays are cast without the lock (readers only read the OcTree); only writing the OcTree
+  // excludes them, so an occupancy query waits at most for that last step.
+  impl_->occupancy->PrepareScan(ToScan(record));
   {
     std::unique_lock<std::shared_mutex> lock(impl_->occupancy_mutex);
-    impl_->occupancy->Integrate(scan);
+    impl_->occupancy->ApplyPreparedScan();
   }
   impl_->keyframes.emplace(result->keyframe_id, std::move(record));
   result->timings.occupancy_ms = MillisecondsSince(start);

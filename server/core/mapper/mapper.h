@@ -104,7 +104,8 @@ struct KeyframeRecord {
 /// The facade of the core: keyframes in, objects and occupancy out (paper Fig. 3).
 /// Thread-safety: the writers (AddKeyframe, UpdatePoses, Restore) and every other method must be
 /// called from one thread at a time, except ReadOccupancy, which may run on any thread at any
-/// time: OctoMap updates take an exclusive lock for one keyframe's integration, and regeneration
+/// time: a keyframe's rays are cast without a lock and only the OcTree update that follows
+/// (tens of milliseconds) takes an exclusive one, and regeneration
 /// builds the new OctoMap off to the side and swaps it in, so readers never wait for it.
 class Mapper {
  public:

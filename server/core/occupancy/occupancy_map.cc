@@ -155,8 +155,14 @@ OccupancyMap::OccupancyMap(OccupancyMap&&) noexcept = default;
 OccupancyMap& OccupancyMap::operator=(OccupancyMap&&) noexcept = default;
 
 void OccupancyMap::Integrate(const ScanW& scan) {
+  PrepareScan(scan);
+  ApplyPreparedScan();
+}
+
+void OccupancyMap::PrepareScan(const ScanW& scan) {
   Impl& m = *impl_;
   m.stats = IntegrationStats{};
+  m.scan_prepared = false;
   VoxelKey origin_key;
   // Like OctoMap, an origin outside the key range casts no rays and marks nothing.
   if (!AllFinite(scan.origin_W) || !PointToKey(scan.origin_W, m.config.resolution_m, &origin_key)) {
@@ -169,6 +175,13 @@ void OccupancyMap::Integrate(const ScanW& scan) {
   m.stats.occupied_voxels = m.occupied_keys.size();
   m.stats.free_voxels = m.grid.CountSet();
   m.stats.cast_ms = MsSince(start);
+  m.scan_prepared = true;
+}
+
+void OccupancyMap::ApplyPreparedScan() {
+  Impl& m = *impl_;
+  if (!m.scan_prepared) return;
+  m.scan_prepared = false;
   const Clock::time_point update_start = Clock::now();
   m.tree.ApplyFreeSpace(m.grid);
   m.ApplyOccupied();

@@ -76,7 +76,8 @@ struct RayHit {
   double distance_m = 0.0;  ///< from the origin to the voxel centre
 };
 
-/// Thread-safety: none. Callers serialize Integrate() against queries.
+/// Thread-safety: none. Callers serialize Integrate() and ApplyPreparedScan() against queries;
+/// PrepareScan() may run alongside const queries (not alongside another writer).
 class OccupancyMap {
  public:
   explicit OccupancyMap(const OccupancyConfig& config);
@@ -88,6 +89,12 @@ class OccupancyMap {
   /// endpoints more occupied. Same result as octomap::OcTree::insertPointCloud (each voxel gets
   /// at most one update per scan, occupied wins over free); non-finite points are skipped.
   void Integrate(const ScanW& scan);
+  /// Integrate() in two steps, for callers that share the map with readers: PrepareScan() casts
+  /// the rays into scratch state of its own and never touches the OcTree, so const queries may
+  /// run meanwhile; ApplyPreparedScan() writes the OcTree (most of a keyframe's time is the
+  /// first step). A second PrepareScan() before the apply replaces the first.
+  void PrepareScan(const ScanW& scan);
+  void ApplyPreparedScan();
   [[nodiscard]] const IntegrationStats& last_stats() const;
 
   [[nodiscard]] VoxelState Query(const Eigen::Vector3d& point_W) const;

@@ -33,6 +33,7 @@ struct OccupancyMap::Impl {
   std::vector<Eigen::Vector3f> ray_ends_W;
   std::vector<std::uint64_t> occupied_keys;
   occupancy_internal::VoxelKey min_key{}, max_key{};
+  bool scan_prepared = false;  ///< PrepareScan() filled the scratch; ApplyPreparedScan() not yet
 };
 
 }  // namespace objmap
