@@ -319,6 +319,19 @@ TEST_F(MapServerScene, ChangesAndInventorySinceAVersion) {
   EXPECT_EQ(entries[0].class_id, kCup);
   EXPECT_EQ(server->Inventory(std::uint64_t{99}, &entries, &version).code,
             StatusCode::kInvalidArgument);
+
+  // After a restart the history starts at the restored version: a watcher from before it gets
+  // the summary (every object, at the current version) at once, without waiting for a change.
+  server.reset();
+  server = OpenServer();
+  ASSERT_TRUE(server);
+  const auto start = std::chrono::steady_clock::now();
+  const auto summary = server->ChangesSince(1, std::chrono::seconds(5));
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(1));
+  ASSERT_EQ(summary.size(), 1u);
+  EXPECT_EQ(summary[0].version, 3u);
+  EXPECT_EQ(summary[0].updated.size(), 2u);
+  EXPECT_TRUE(server->ChangesSince(3, std::chrono::milliseconds(10)).empty());
 }
 
 }  // namespace

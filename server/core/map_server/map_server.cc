@@ -324,9 +324,11 @@ ServerStatus MapServer::Status() const {
 std::vector<MapChange> MapServer::ChangesSince(std::uint64_t since_version,
                                                std::chrono::milliseconds timeout) const {
   std::unique_lock<std::mutex> lock(impl_->changes_mutex);
+  // A version older than the remembered history (after a restart, say) is answered at once
+  // with the summary below, not after the next change.
   auto newer = [&] {
-    return impl_->shutting_down || (!impl_->changes.empty() &&
-                                    impl_->changes.back().version > since_version);
+    return impl_->shutting_down || since_version < impl_->history_start ||
+           (!impl_->changes.empty() && impl_->changes.back().version > since_version);
   };
   if (!impl_->changes_cv.wait_for(lock, timeout, newer) || impl_->shutting_down) return {};
   const auto& changes = impl_->changes;
