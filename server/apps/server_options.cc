@@ -74,6 +74,13 @@ bool ParseServerOptions(int argc, const char* const* argv, ServerOptions* option
     *why = "--db PATH is required";
     return false;
   }
+  // Checked here, before the database is opened and the detector loaded.
+  std::string invalid;
+  if (!options->grpc.IsValid(&invalid)) {
+    *why = (invalid.rfind("listen address", 0) == 0 ? "--listen: " : "--max-message-mb: ") +
+           invalid;
+    return false;
+  }
   return true;
 }
 

@@ -147,6 +147,13 @@ TEST(ServerOptions, DefaultsToLoopbackAndRejectsBadCommandLines) {
   const char* bad_size[] = {"objmap_server", "--db", "m.db", "--max-message-mb", "lots"};
   EXPECT_FALSE(ParseServerOptions(5, bad_size, &options, &why));
   EXPECT_NE(why.find("--max-message-mb"), std::string::npos) << why;
+  // Out-of-range values are refused with the command line, before the database is opened.
+  const char* too_big[] = {"objmap_server", "--db", "m.db", "--max-message-mb", "4096"};
+  EXPECT_FALSE(ParseServerOptions(5, too_big, &options, &why));
+  EXPECT_EQ(why, "--max-message-mb: max message size 4096 MiB must lie in 1..2047");
+  const char* no_port[] = {"objmap_server", "--db", "m.db", "--listen", "localhost"};
+  EXPECT_FALSE(ParseServerOptions(5, no_port, &options, &why));
+  EXPECT_EQ(why, "--listen: listen address 'localhost' must be host:port");
 }
 
 }  // namespace
