@@ -22,7 +22,8 @@ inline constexpr int kExitUsage = 2;  ///< bad arguments
 /// The help text lines of the options every server command takes.
 inline constexpr char kServerOptionsUsage[] =
     "  --server ADDR             server address (default 127.0.0.1:50051)\n"
-    "  --timeout S               deadline of each call, seconds (default 30; 0: none)\n";
+    "  --timeout S               deadline of each call, seconds (default 30; export 120;\n"
+    "                            update-poses --wait 600; 0: none)\n";
 
 /// `flags` plus --server and --timeout.
 [[nodiscard]] std::set<std::string> WithServerFlags(std::set<std::string> flags);
