@@ -144,6 +144,18 @@ TEST_F(MapperScene, PoseUpdateRegeneratesObjectsAndOccupancy) {
   }
   const Eigen::Vector3d wall_point = G * Eigen::Vector3d(1.505, 0.0, 0.8);
   EXPECT_EQ(mapper.occupancy().Query(wall_point), VoxelState::kOccupied);
+
+  // The same poses sent again, with the noise of a text or quaternion round trip, move nothing;
+  // a millimetre does.
+  Eigen::Isometry3d resent = poses[2];
+  resent.translation().x() += 1e-9;
+  resent.rotate(Eigen::AngleAxisd(1e-9, Eigen::Vector3d::UnitX()));
+  int moved = -1;
+  ASSERT_TRUE(mapper.UpdatePoses({{1, poses[1]}, {2, resent}}, &why, &moved)) << why;
+  EXPECT_EQ(moved, 0);
+  resent.translation().x() += 1e-3;
+  ASSERT_TRUE(mapper.UpdatePoses({{2, resent}}, &why, &moved)) << why;
+  EXPECT_EQ(moved, 1);
 }
 
 // The paper's failures: a keyboard flat on the desk is lost in depth noise, and a table, being

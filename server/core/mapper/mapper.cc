@@ -18,6 +18,17 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// A pose that differs from the current one by less than this is the same pose sent again
+// (through text, quaternions or float32 on its way): nothing is regenerated for it.
+constexpr double kSamePoseTranslationM = 1e-6;
+constexpr double kSamePoseRotationRad = 1e-6;
+
+bool IsSamePose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  const Eigen::Isometry3d delta = a.inverse() * b;
+  return delta.translation().norm() < kSamePoseTranslationM &&
+         Eigen::AngleAxisd(delta.linear()).angle() < kSamePoseRotationRad;
+}
+
 double MillisecondsSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
@@ -230,7 +241,7 @@ bool Mapper::UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses, s
   std::set<KeyframeId> moved;
   for (const auto& [id, T_W_C] : poses) {
     KeyframeRecord& record = impl_->keyframes[id];
-    if (record.T_W_C.matrix() == T_W_C.matrix()) continue;
+    if (IsSamePose(record.T_W_C, T_W_C)) continue;
     record.T_W_C = T_W_C;
     moved.insert(id);
   }

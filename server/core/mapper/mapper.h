@@ -122,7 +122,9 @@ class Mapper {
   /// Replaces keyframe poses (a pose-graph update) and regenerates the object models and the
   /// occupancy map from the stored keyframe clouds. Unknown ids or bad poses: false, map unchanged.
   /// Only objects seen from moved keyframes are rebuilt; the OctoMap is rebuilt (aside, then
-  /// swapped) when any keyframe moved. `moved` (may be null) receives how many keyframes moved.
+  /// swapped) when any keyframe moved. A pose within 1 um and 1 urad of the current one is the
+  /// same pose sent again and moves nothing. `moved` (may be null) receives how many keyframes
+  /// moved.
   [[nodiscard]] bool UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses,
                                  std::string* why, int* moved = nullptr);
 
