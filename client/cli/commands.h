@@ -29,6 +29,8 @@ int RunExportCommand(int argc, char** argv);
 /// `objmap update-poses poses.txt`: corrected keyframe poses from a pose-graph back end.
 int RunUpdatePosesCommand(int argc, char** argv);
 
+/// `objmap keyframes`: stored keyframes and their current poses, in the poses-file format.
+int RunKeyframesCommand(int argc, char** argv);
 /// `objmap status`: map version, counts, queue, regeneration, database.
 int RunStatusCommand(int argc, char** argv);
 

@@ -45,12 +45,14 @@ int RunUpdatePosesCommand(int argc, char** argv) {
   v1::UpdatePosesResponse response;
   const grpc::Status status = client->UpdatePoses(request, &response);
   if (!status.ok()) return FailWithStatus("update-poses", status);
-  std::cout << "map version " << response.map_version() << ": " << response.keyframes_moved()
-            << " of " << poses.size() << " keyframes moved; ";
+  // Without --wait the server answers once the poses are stored, before it knows which moved.
   if (response.regenerated()) {
-    std::cout << "regenerated in " << response.regeneration_ms() << " ms\n";
+    std::cout << "map version " << response.map_version() << ": " << response.keyframes_moved()
+              << " of " << poses.size() << " keyframes moved; regenerated in "
+              << response.regeneration_ms() << " ms\n";
   } else {
-    std::cout << "regeneration queued (`objmap status` shows when it is done)\n";
+    std::cout << "map version " << response.map_version() << ": " << poses.size()
+              << " poses stored; regeneration queued (`objmap status` shows when it is done)\n";
   }
   return kExitOk;
 }

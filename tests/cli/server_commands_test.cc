@@ -40,19 +40,22 @@ TEST(CliServerCommands, ArgumentErrorsExitWithUsage) {
   ExpectOutput(RunObjmap("export --region 0 0 0 1 1 1"), 2, "at least one of --octomap");
   ExpectOutput(RunObjmap("update-poses"), 2, "usage: objmap update-poses");
   ExpectOutput(RunObjmap("ingest"), 2, "usage: objmap ingest");
+  ExpectOutput(RunObjmap("keyframes --limit -1"), 2, "--limit expects a whole number >= 0");
+  ExpectOutput(RunObjmap("keyframes extra"), 2, "usage: objmap keyframes");
   ExpectOutput(RunObjmap("ingest some/dir --max-keyframes 2.5"), 2,
                "--max-keyframes expects a whole number >= 0, got '2.5'");
 }
 
 TEST(CliServerCommands, HelpExitsZero) {
   for (const char* command :
-       {"ingest", "inventory", "objects", "free", "export", "update-poses", "status"}) {
+       {"ingest", "inventory", "objects", "free", "export", "update-poses", "keyframes",
+        "status"}) {
     ExpectOutput(RunObjmap(std::string(command) + " --help"), 0, "--server ADDR");
   }
 }
 
 TEST(CliServerCommands, UnreachableServerPrintsTheStatusCode) {
-  for (const std::string command : {"status", "inventory --json", "objects --class cup",
+  for (const std::string command : {"status", "keyframes", "inventory --json", "objects --class cup",
                                     "free 0 0 0 1 1 1", "export --octomap /nonexistent/x.bt"}) {
     ExpectOutput(RunObjmap(command + " " + kNoServer), 1,
                  "objmap " + command.substr(0, command.find(' ')) + ": UNAVAILABLE: ");

@@ -21,6 +21,7 @@
 
 #include "dataset/keyframe_selector.h"
 #include "dataset/sequence_reader.h"
+#include "cli/run_objmap.h"
 #include "integration/server_process.h"
 #include "objmap/client.h"
 #include "objmap/conversions.h"
@@ -547,6 +548,33 @@ TEST_F(ServerIntegration, KilledDuringIngestKeepsEveryAcknowledgedKeyframeAndThe
   std::cout << "killed after " << acked << " acknowledged keyframes; " << stored
             << " stored; inventory " << Describe(inventory) << std::endl;
   EXPECT_EQ(server->Kill(SIGTERM), 0) << server->Log();
+}
+
+TEST_F(ServerIntegration, CliExportsKeyframePosesThatUpdatePosesTakesBackUnmoved) {
+  const std::string poses = (shared().dir / "poses.txt").string();
+  const std::string server = " --server " + shared().server->address();
+  std::map<std::int64_t, std::uint64_t> changed_before;
+  for (const v1::Object& object : Objects("", false, true)) {
+    changed_before[object.id()] = object.changed_version();
+  }
+  const testing::CommandResult exported = testing::RunObjmap("keyframes --out " + poses + server);
+  ASSERT_EQ(exported.exit_code, 0) << exported.output;
+  EXPECT_NE(exported.output.find(std::to_string(kKeyframes) + " keyframes written"),
+            std::string::npos)
+      << exported.output;
+  // The file is what update-poses reads; the same poses sent back move nothing.
+  const testing::CommandResult update =
+      testing::RunObjmap("update-poses " + poses + " --wait" + server);
+  ASSERT_EQ(update.exit_code, 0) << update.output;
+  EXPECT_NE(update.output.find(": 0 of " + std::to_string(kKeyframes) + " keyframes moved"),
+            std::string::npos)
+      << update.output;
+  // Nothing was rebuilt: every object is as it was.
+  std::map<std::int64_t, std::uint64_t> changed_after;
+  for (const v1::Object& object : Objects("", false, true)) {
+    changed_after[object.id()] = object.changed_version();
+  }
+  EXPECT_EQ(changed_after, changed_before);
 }
 
 // Last: moves the shared map.
