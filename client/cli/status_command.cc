@@ -1,4 +1,5 @@
 // `objmap status`: the state of a running server.
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 
@@ -17,6 +18,13 @@ std::string Regeneration(const v1::StatusResponse& status) {
   std::snprintf(text, sizeof(text), "idle (last took %.1f ms, for version %llu)",
                 status.last_regeneration_ms(),
                 static_cast<unsigned long long>(status.last_regeneration_version()));
+  return text;
+}
+
+std::string Startup(const v1::StatusResponse& status) {
+  char text[128];
+  std::snprintf(text, sizeof(text), "%.1f s, %d keyframes integrated into the OctoMap",
+                status.startup_ms() / 1000.0, status.startup_keyframes_integrated());
   return text;
 }
 
@@ -54,6 +62,14 @@ int RunStatusCommand(int argc, char** argv) {
             << "ingest queue:  " << status.ingest_queue() << "\n"
             << "regeneration:  " << Regeneration(status) << "\n"
             << "database:      " << status.database() << " (" << database_mib << ")\n"
+            << "checkpoint:    "
+            << (status.checkpoint_version() == 0
+                    ? std::string("none")
+                    : "OctoMap of version " + std::to_string(status.checkpoint_version()) +
+                          " (saved in " + std::to_string(std::lround(status.last_checkpoint_ms())) +
+                          " ms)")
+            << "\n"
+            << "startup:       " << Startup(status) << "\n"
             << "uptime:        " << Duration(status.uptime_s()) << "\n";
   return kExitOk;
 }

@@ -79,6 +79,8 @@ void VisitServerConfig(ServerConfig* c, Visitor& v) {
   v("change_history", &s.change_history);
   v("max_query_volume_m3", &s.max_query_volume_m3);
   v("max_listed_voxels", &s.max_listed_voxels);
+  v("checkpoint_every_keyframes", &s.checkpoint_every_keyframes);
+  v("checkpoint_work_ratio", &s.checkpoint_work_ratio);
   v.Section("store");
   v("color_jpeg_quality", &s.store.color_jpeg_quality);
   v("busy_timeout_ms", &s.store.busy_timeout_ms);

@@ -127,6 +127,10 @@ grpc::Status MapServiceImpl::Status(grpc::ServerContext* /*context*/,
     response->set_database(status.database);
     response->set_database_bytes(status.database_bytes);
     response->set_uptime_s(status.uptime_s);
+    response->set_checkpoint_version(status.checkpoint_version);
+    response->set_last_checkpoint_ms(status.last_checkpoint_ms);
+    response->set_startup_ms(status.startup_ms);
+    response->set_startup_keyframes_integrated(status.startup_keyframes_integrated);
     return grpc::Status::OK;
   });
 }

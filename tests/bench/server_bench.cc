@@ -3,7 +3,11 @@
 // regeneration time after a pose-graph update against the number of keyframes, and bytes stored
 // per keyframe. Keyframes of a recorded sequence go through the server's CenterNet detector
 // (as `objmap ingest` sends them); without the model the map has no objects and the bench says so.
+// Last, restart time with the OctoMap checkpoint against re-integrating every keyframe.
 //   server_bench [sequence=../shared/data/redkitchen] [keyframes=68] [query_rounds=300]
+#include <sqlite3.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -13,7 +17,6 @@
 #include <mutex>
 #include <string>
 #include <thread>
-#include <unistd.h>
 #include <vector>
 
 #include "dataset/keyframe_selector.h"
@@ -289,14 +292,63 @@ int main(int argc, char** argv) {
               num_keyframes, sum.depth / n / 1e3, sum.mask / n / 1e3, sum.color / n / 1e3,
               sum.observations / n / 1e3, sum.total / n / 1e3, status.database_bytes / 1e6,
               status.database_bytes / n / 1e3);
+  std::error_code ignored;
+  const auto wal_bytes = fs::file_size(db.string() + "-wal", ignored);
+  std::printf("of which the WAL %.1f MB; OctoMap checkpoint of version %llu saved in %.0f ms\n",
+              ignored ? 0.0 : wal_bytes / 1e6,
+              static_cast<unsigned long long>(status.checkpoint_version),
+              status.last_checkpoint_ms);
   std::printf("map: %zu keyframes, %zu objects (%zu confirmed), version %llu\n", status.keyframes,
               status.objects, status.confirmed_objects,
               static_cast<unsigned long long>(status.map_version));
 
-  map_server->Shutdown();
+  // Restart: the map rebuilt from the file, with the OctoMap checkpoint the shutdown saved, and,
+  // as the baseline, from a copy without it (every keyframe integrated again).
   grpc_server->Shutdown();
   store.reset();
   map_server.reset();
-  for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(db.string() + suffix);
+  const fs::path baseline_db = db.string() + ".baseline";
+  fs::copy_file(db, baseline_db, fs::copy_options::overwrite_existing);
+  std::uint64_t checkpoint_bytes = 0;
+  {
+    sqlite3* raw = nullptr;
+    sqlite3_stmt* size = nullptr;
+    if (sqlite3_open(db.c_str(), &raw) == SQLITE_OK &&
+        sqlite3_prepare_v2(raw, "SELECT length(state) FROM occupancy_checkpoint", -1, &size,
+                           nullptr) == SQLITE_OK &&
+        sqlite3_step(size) == SQLITE_ROW) {
+      checkpoint_bytes = static_cast<std::uint64_t>(sqlite3_column_int64(size, 0));
+    }
+    sqlite3_finalize(size);
+    sqlite3_close(raw);
+    if (sqlite3_open(baseline_db.c_str(), &raw) == SQLITE_OK) {
+      sqlite3_exec(raw, "DELETE FROM occupancy_checkpoint", nullptr, nullptr, nullptr);
+    }
+    sqlite3_close(raw);
+  }
+  auto restart = [&](const fs::path& file, int checkpoint_every) {
+    MapServerConfig config;
+    config.checkpoint_every_keyframes = checkpoint_every;
+    std::unique_ptr<MapServer> reopened = MapServer::Open(config, file.string(), nullptr, &why);
+    if (!reopened) {
+      std::fprintf(stderr, "server_bench: restart: %s\n", why.c_str());
+      std::exit(1);
+    }
+    return reopened->Status();
+  };
+  const ServerStatus with_checkpoint = restart(db, 20);
+  const ServerStatus without = restart(baseline_db, 0);
+  std::printf("\nRestart (open the file, decode keyframes, rebuild objects and the OctoMap), %d "
+              "keyframes:\n| | startup ms | keyframes integrated |\n|---|---|---|\n"
+              "| baseline: every keyframe integrated again | %.0f | %d |\n"
+              "| OctoMap checkpoint (%.1f MB) | %.0f | %d |\n"
+              "| **ratio** | **%.1fx** | |\n",
+              num_keyframes, without.startup_ms, without.startup_keyframes_integrated,
+              checkpoint_bytes / 1e6, with_checkpoint.startup_ms,
+              with_checkpoint.startup_keyframes_integrated,
+              without.startup_ms / std::max(1.0, with_checkpoint.startup_ms));
+  for (const fs::path& file : {db, baseline_db}) {
+    for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(file.string() + suffix);
+  }
   return 0;
 }

@@ -181,16 +181,29 @@ TEST_F(MapServerScene, BadRequestsNameTheFieldAndChangeNothing) {
 
 TEST_F(MapServerScene, RestartRestoresTheSameMap) {
   std::vector<std::shared_ptr<const ObjectView>> before;
+  std::string octomap_before;
   {
     auto server = OpenServer();
     ASSERT_TRUE(server);
+    EXPECT_EQ(server->Status().checkpoint_version, 0u);
     IngestAllViews(server.get());
     before = Cups(*server);
+    std::size_t leaves = 0;
+    std::uint64_t version = 0;
+    ASSERT_TRUE(server->OctomapBytes(std::nullopt, &octomap_before, &leaves, &version).ok());
   }
   auto server = OpenServer();
   ASSERT_TRUE(server);
   EXPECT_EQ(server->Status().keyframes, 3u);
   EXPECT_EQ(server->Status().map_version, 3u);
+  // The shutdown saved the OctoMap; the restart loaded it instead of integrating the keyframes.
+  EXPECT_EQ(server->Status().checkpoint_version, 3u);
+  EXPECT_EQ(server->Status().startup_keyframes_integrated, 0);
+  std::string octomap_after;
+  std::size_t leaves = 0;
+  std::uint64_t octomap_version = 0;
+  ASSERT_TRUE(server->OctomapBytes(std::nullopt, &octomap_after, &leaves, &octomap_version).ok());
+  EXPECT_EQ(octomap_after, octomap_before);
   const auto after = Cups(*server);
   ASSERT_EQ(after.size(), before.size());
   for (std::size_t i = 0; i < after.size(); ++i) {
@@ -206,6 +219,29 @@ TEST_F(MapServerScene, RestartRestoresTheSameMap) {
   EXPECT_EQ(outcome.keyframe_id, 4);
   EXPECT_EQ(outcome.map_version, 4u);
   EXPECT_EQ(outcome.created.size(), 0u);
+}
+
+TEST_F(MapServerScene, WithoutCheckpointsARestartIntegratesEveryKeyframeToTheSameOctomap) {
+  MapServerConfig config;
+  config.checkpoint_every_keyframes = 0;
+  std::string why, octomap_before, octomap_after;
+  std::size_t leaves = 0;
+  std::uint64_t version = 0;
+  {
+    auto server = MapServer::Open(config, db_path_, nullptr, &why);
+    ASSERT_TRUE(server) << why;
+    IngestAllViews(server.get());
+    ASSERT_TRUE(server->OctomapBytes(std::nullopt, &octomap_before, &leaves, &version).ok());
+  }
+  auto server = MapServer::Open(config, db_path_, nullptr, &why);
+  ASSERT_TRUE(server) << why;
+  EXPECT_EQ(server->Status().checkpoint_version, 0u);
+  EXPECT_EQ(server->Status().startup_keyframes_integrated, 3);
+  ASSERT_TRUE(server->OctomapBytes(std::nullopt, &octomap_after, &leaves, &version).ok());
+  EXPECT_EQ(octomap_after, octomap_before);
+  config.checkpoint_every_keyframes = -1;
+  EXPECT_FALSE(MapServer::Open(config, db_path_, nullptr, &why));
+  EXPECT_NE(why.find("checkpoint_every_keyframes"), std::string::npos) << why;
 }
 
 TEST_F(MapServerScene, PoseUpdateMovesObjectsAndOccupancy) {

@@ -158,6 +158,62 @@ TEST_F(MapperScene, PoseUpdateRegeneratesObjectsAndOccupancy) {
   EXPECT_EQ(moved, 1);
 }
 
+TEST_F(MapperScene, RestoreLoadsAUsableCheckpointAndIntegratesOnlyTheLaterKeyframes) {
+  Mapper live{MapperConfig{}};
+  OccupancyCheckpoint after_two;
+  for (int view = 0; view < 3; ++view) {
+    KeyframeResult result;
+    std::string why;
+    ASSERT_TRUE(live.AddKeyframe(Frame(view), CupDetections(view), &result, &why)) << why;
+    if (view == 1) after_two = live.MakeOccupancyCheckpoint();
+  }
+  ASSERT_EQ(after_two.keyframe_poses.size(), 2u);
+  // What a restart has: the keyframe records and the observations.
+  auto records = [&] {
+    std::map<KeyframeId, KeyframeRecord> out;
+    for (KeyframeId id = 1; id <= 3; ++id) out[id] = *live.FindKeyframe(id);
+    return out;
+  };
+  auto observations = [&] {
+    std::map<ObjectId, std::vector<ObjectObservation>> out;
+    for (const auto& [id, object] : live.objects().objects()) out[id] = object.observations;
+    return out;
+  };
+  const std::string live_state = live.occupancy().WriteState();
+
+  Mapper from_checkpoint{MapperConfig{}};
+  RestoreOutcome outcome =
+      from_checkpoint.Restore(records(), observations(), live.objects().next_id(), &after_two);
+  EXPECT_TRUE(outcome.from_checkpoint) << outcome.checkpoint_refused;
+  EXPECT_EQ(outcome.keyframes_integrated, 1);
+  // The same OctoMap, log-odds included, as the mapper that integrated all three.
+  EXPECT_EQ(from_checkpoint.occupancy().WriteState(), live_state);
+
+  Mapper without{MapperConfig{}};
+  outcome = without.Restore(records(), observations(), live.objects().next_id());
+  EXPECT_FALSE(outcome.from_checkpoint);
+  EXPECT_EQ(outcome.keyframes_integrated, 3);
+  EXPECT_EQ(without.occupancy().WriteState(), live_state);
+
+  // A keyframe moved after the checkpoint was taken: the checkpoint is refused and the OctoMap
+  // rebuilt from every keyframe.
+  OccupancyCheckpoint stale = after_two;
+  stale.keyframe_poses[2].translation().x() += 0.05;
+  Mapper refused{MapperConfig{}};
+  outcome = refused.Restore(records(), observations(), live.objects().next_id(), &stale);
+  EXPECT_FALSE(outcome.from_checkpoint);
+  EXPECT_EQ(outcome.checkpoint_refused, "keyframe 2 moved since the checkpoint");
+  EXPECT_EQ(outcome.keyframes_integrated, 3);
+  EXPECT_EQ(refused.occupancy().WriteState(), live_state);
+  // A corrupt state is refused the same way.
+  OccupancyCheckpoint corrupt = after_two;
+  corrupt.state.back() ^= 1;
+  outcome = refused.Restore(records(), observations(), live.objects().next_id(), &corrupt);
+  EXPECT_FALSE(outcome.from_checkpoint);
+  EXPECT_NE(outcome.checkpoint_refused.find("corrupt"), std::string::npos)
+      << outcome.checkpoint_refused;
+}
+
 // The paper's failures: a keyboard flat on the desk is lost in depth noise, and a table, being
 // the supporting plane, has no segment of its own.
 TEST_F(MapperScene, FlatKeyboardAndTableBecomeObjects) {

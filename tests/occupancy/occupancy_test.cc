@@ -106,6 +106,50 @@ TEST(OccupancyMap, PreparedScanLeavesTheTreeAloneUntilApplied) {
   EXPECT_NE(in_steps.Counts().occupied, before.occupied);
 }
 
+TEST(OccupancyMap, StateRoundTripContinuesAsTheOriginal) {
+  OccupancyMap original(TestConfig());
+  original.Integrate(WallScan(2.005, 0.3));
+  OccupancyMap restored(TestConfig());
+  std::string why;
+  ASSERT_TRUE(restored.ReadState(original.WriteState(), &why)) << why;
+  EXPECT_EQ(restored.BinaryBytes(false, {}, {}, nullptr),
+            original.BinaryBytes(false, {}, {}, nullptr));
+  // Log-odds, not only occupancy bits, came back: further scans give the same map.
+  const ScanW again = WallScan(1.505, 0.2);
+  original.Integrate(again);
+  restored.Integrate(again);
+  EXPECT_EQ(restored.WriteState(), original.WriteState());
+  EXPECT_GT(restored.Counts().occupied, 0u);
+
+  // An empty map round-trips too.
+  OccupancyMap empty(TestConfig());
+  ASSERT_TRUE(restored.ReadState(empty.WriteState(), &why)) << why;
+  EXPECT_EQ(restored.Counts().occupied + restored.Counts().free, 0u);
+}
+
+TEST(OccupancyMap, CorruptOrForeignStateIsRefusedAndTheMapKept) {
+  OccupancyMap original(TestConfig());
+  original.Integrate(WallScan(2.005, 0.3));
+  const std::string state = original.WriteState();
+  OccupancyMap target(TestConfig());
+  target.Integrate(WallScan(1.505, 0.2));
+  const OccupancyCounts before = target.Counts();
+  std::string flipped = state;
+  flipped[flipped.size() / 2] ^= 0x10;
+  std::string why;
+  EXPECT_FALSE(target.ReadState(flipped, &why));
+  EXPECT_NE(why.find("corrupt"), std::string::npos) << why;
+  EXPECT_FALSE(target.ReadState(state.substr(0, state.size() - 100), &why));
+  EXPECT_FALSE(target.ReadState("", &why));
+  OccupancyConfig coarse = TestConfig();
+  coarse.resolution_m = 0.02;
+  OccupancyMap other_resolution(coarse);
+  EXPECT_FALSE(other_resolution.ReadState(state, &why));
+  EXPECT_NE(why.find("another resolution"), std::string::npos) << why;
+  EXPECT_EQ(target.Counts().occupied, before.occupied);
+  EXPECT_EQ(target.Counts().free, before.free);
+}
+
 TEST(OccupancyMap, MaxRangeTruncatesFreeSpaceAndDropsTheEndpoint) {
   OccupancyConfig config = TestConfig();
   config.max_range_m = 1.0;

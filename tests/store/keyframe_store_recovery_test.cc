@@ -91,6 +91,60 @@ TEST_F(KeyframeStoreRecoveryTest, RejectsANewerSchemaVersion) {
   ExpectOpenFails(Path(), "is newer than this build's version");
 }
 
+TEST_F(KeyframeStoreRecoveryTest, MigratesASchemaVersion1FileAndKeepsItsKeyframes) {
+  CreateStore(Path(), 3);
+  // What a version 1 file looks like: no checkpoint table.
+  RunSql(Path(), "DROP TABLE occupancy_checkpoint; PRAGMA user_version = 1;");
+  std::string why;
+  auto store = KeyframeStore::Open(Path(), KeyframeStoreConfig{}, &why);
+  ASSERT_NE(store, nullptr) << why;
+  EXPECT_EQ(store->NumKeyframes(), 3u);
+  std::optional<StoredCheckpoint> checkpoint;
+  ASSERT_TRUE(store->LoadCheckpoint(&checkpoint, &why)) << why;
+  EXPECT_FALSE(checkpoint.has_value());
+  StoredCheckpoint saved;
+  saved.map_version = 3;
+  saved.keyframe_poses[1] = MakeKeyframe(1).T_W_C;
+  saved.occupancy_state = "state";
+  EXPECT_TRUE(store->SaveCheckpoint(saved, &why)) << why;
+  store.reset();
+  // Reopened, it is a version 2 file like a new one.
+  store = KeyframeStore::Open(Path(), KeyframeStoreConfig{}, &why);
+  ASSERT_NE(store, nullptr) << why;
+  ASSERT_TRUE(store->LoadCheckpoint(&checkpoint, &why)) << why;
+  ASSERT_TRUE(checkpoint.has_value());
+  EXPECT_EQ(checkpoint->map_version, 3u);
+}
+
+TEST_F(KeyframeStoreRecoveryTest, CheckpointRoundTripsAndACorruptOneIsReported) {
+  CreateStore(Path(), 2);
+  std::string why;
+  auto store = KeyframeStore::Open(Path(), KeyframeStoreConfig{}, &why);
+  ASSERT_NE(store, nullptr) << why;
+  StoredCheckpoint saved;
+  saved.map_version = 7;
+  saved.keyframe_poses[1] = MakeKeyframe(1).T_W_C;
+  saved.keyframe_poses[2] = MakeKeyframe(2).T_W_C;
+  saved.occupancy_state = std::string("objmap\0occupancy", 16);
+  ASSERT_TRUE(store->SaveCheckpoint(saved, &why)) << why;
+  saved.map_version = 8;  // a newer checkpoint replaces the older
+  ASSERT_TRUE(store->SaveCheckpoint(saved, &why)) << why;
+  std::optional<StoredCheckpoint> loaded;
+  ASSERT_TRUE(store->LoadCheckpoint(&loaded, &why)) << why;
+  ASSERT_TRUE(loaded.has_value());
+  EXPECT_EQ(loaded->map_version, 8u);
+  EXPECT_EQ(loaded->occupancy_state, saved.occupancy_state);
+  ASSERT_EQ(loaded->keyframe_poses.size(), 2u);
+  EXPECT_TRUE(loaded->keyframe_poses[2].matrix() == saved.keyframe_poses[2].matrix());
+  store.reset();
+  RunSql(Path(), "UPDATE occupancy_checkpoint SET keyframe_poses = x'0102030405';");
+  store = KeyframeStore::Open(Path(), KeyframeStoreConfig{}, &why);
+  ASSERT_NE(store, nullptr) << why;
+  EXPECT_FALSE(store->LoadCheckpoint(&loaded, &why));
+  EXPECT_NE(why.find("checkpoint"), std::string::npos) << why;
+  EXPECT_NE(why.find(Path()), std::string::npos) << why;
+}
+
 TEST_F(KeyframeStoreRecoveryTest, RejectsDatabasesOfOtherApplications) {
   RunSql(Path("versioned.db"), "CREATE TABLE songs(title TEXT); PRAGMA user_version = 1;");
   ExpectOpenFails(Path("versioned.db"), "not an objmap database");

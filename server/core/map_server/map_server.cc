@@ -48,6 +48,14 @@ bool MapServerConfig::IsValid(std::string* why) const {
     *why = "MapServerConfig: max_queue, change_history and max_listed_voxels must be >= 1";
     return false;
   }
+  if (checkpoint_every_keyframes < 0) {
+    *why = "MapServerConfig.checkpoint_every_keyframes must be >= 0 (0: never)";
+    return false;
+  }
+  if (!(checkpoint_work_ratio >= 0.0) || !std::isfinite(checkpoint_work_ratio)) {
+    *why = "MapServerConfig.checkpoint_work_ratio must be finite and >= 0";
+    return false;
+  }
   if (!(max_query_volume_m3 > 0.0)) {
     *why = "MapServerConfig.max_query_volume_m3 must be positive";
     return false;
@@ -66,23 +74,35 @@ std::unique_ptr<MapServer> MapServer::Open(const MapServerConfig& config,
                                            const std::string& db_path,
                                            std::unique_ptr<Detector> detector, std::string* why) {
   if (!config.IsValid(why)) return nullptr;
+  const auto start = Clock::now();
   std::unique_ptr<MapServer> server(new MapServer());
   Impl& impl = *server->impl_;
   impl.config = config;
   impl.store = KeyframeStore::Open(db_path, config.store, why);
   if (!impl.store) return nullptr;
   StoredMap stored;
+  std::optional<StoredCheckpoint> checkpoint;
   if (!impl.store->LoadAll(&stored, why)) {
     *why = "cannot load " + db_path + ": " + *why;
     return nullptr;
   }
+  // A checkpoint that cannot be read is only a slower start: every keyframe is integrated.
+  std::string checkpoint_error;
+  if (!impl.store->LoadCheckpoint(&checkpoint, &checkpoint_error)) checkpoint.reset();
+  if (checkpoint) impl.checkpoint_version = checkpoint->map_version;
   const std::uint64_t version = stored.map_version;
   impl.mapper = std::make_unique<Mapper>(config.mapper);
-  RestoreMapper(std::move(stored), impl.mapper.get(), &impl.known_keyframes);
+  const RestoreOutcome restored = RestoreMapper(std::move(stored), std::move(checkpoint),
+                                                impl.mapper.get(), &impl.known_keyframes);
+  impl.startup_keyframes_integrated = restored.keyframes_integrated;
+  impl.keyframes_since_checkpoint = restored.keyframes_integrated;
   impl.planned_version = version;
   impl.history_start = version;
   impl.snapshot = impl.snapshot_builder.Build(*impl.mapper, version, nullptr);
   impl.detector = std::move(detector);
+  // What this start had to integrate, the next one loads.
+  impl.MaybeCheckpoint(/*force=*/true);
+  impl.startup_ms = MillisecondsSince(start);
   impl.worker = std::thread([&impl] { impl.Run(); });
   return server;
 }
@@ -117,7 +137,7 @@ void MapServer::Impl::Run() {
     {
       std::unique_lock<std::mutex> lock(queue_mutex);
       queue_cv.wait(lock, [this] { return stopping || !queue.empty(); });
-      if (queue.empty()) return;  // stopping, and everything queued is done
+      if (queue.empty()) break;  // stopping, and everything queued is done
       job = queue.front();
     }
     MapJob::Result result =
@@ -128,7 +148,31 @@ void MapServer::Impl::Run() {
       queue.pop_front();
     }
     job->done.set_value(std::move(result));
+    MaybeCheckpoint(/*force=*/false);  // after the answer: the caller does not wait for it
   }
+  MaybeCheckpoint(/*force=*/true);
+}
+
+void MapServer::Impl::MaybeCheckpoint(bool force) {
+  const int every = config.checkpoint_every_keyframes;
+  if (every == 0 || (keyframes_since_checkpoint == 0 && !checkpoint_due)) return;
+  const bool enough_work =
+      keyframes_since_checkpoint >= every &&
+      mapping_ms_since_checkpoint >= config.checkpoint_work_ratio * last_checkpoint_ms;
+  if (!force && !checkpoint_due && !enough_work) return;
+  const auto start = Clock::now();
+  StoredCheckpoint checkpoint;
+  checkpoint.map_version = Current()->version;
+  OccupancyCheckpoint occupancy = mapper->MakeOccupancyCheckpoint();
+  checkpoint.occupancy_state = std::move(occupancy.state);
+  checkpoint.keyframe_poses = std::move(occupancy.keyframe_poses);
+  std::string why;
+  if (!store->SaveCheckpoint(checkpoint, &why)) return;  // tried again after the next keyframe
+  keyframes_since_checkpoint = 0;
+  mapping_ms_since_checkpoint = 0.0;
+  checkpoint_due = false;
+  checkpoint_version = checkpoint.map_version;
+  last_checkpoint_ms = MillisecondsSince(start);
 }
 
 void MapServer::Impl::Publish(std::shared_ptr<const MapSnapshot> next, MapChange change) {
@@ -146,6 +190,7 @@ void MapServer::Impl::Publish(std::shared_ptr<const MapSnapshot> next, MapChange
 }
 
 MapJob::Result MapServer::Impl::ApplyKeyframe(MapJob* job) {
+  const auto start = Clock::now();
   MapJob::Result out;
   KeyframeResult result;
   std::string why;
@@ -188,6 +233,8 @@ MapJob::Result MapServer::Impl::ApplyKeyframe(MapJob* job) {
                        diff.added, diff.updated, diff.removed};
   Publish(std::move(next), std::move(map_change));
 
+  ++keyframes_since_checkpoint;
+  mapping_ms_since_checkpoint += MillisecondsSince(start);
   out.keyframe.keyframe_id = result.keyframe_id;
   out.keyframe.map_version = job->version;
   out.keyframe.detections_used = result.detections_used;
@@ -224,6 +271,7 @@ MapJob::Result MapServer::Impl::ApplyPoses(MapJob* job) {
   }
   last_regeneration_ms = elapsed_ms;
   last_regeneration_version = job->version;
+  if (moved > 0) checkpoint_due = true;
   Publish(std::move(next), MapChange{job->version, MapChange::Kind::kPosesUpdated, 0, diff.added,
                                      diff.updated, diff.removed});
   out.poses.map_version = job->version;
@@ -318,6 +366,10 @@ ServerStatus MapServer::Status() const {
   status.database = impl_->store->path();
   status.database_bytes = impl_->store->FileBytes();
   status.uptime_s = std::chrono::duration<double>(Clock::now() - impl_->started).count();
+  status.checkpoint_version = impl_->checkpoint_version;
+  status.last_checkpoint_ms = impl_->last_checkpoint_ms;
+  status.startup_ms = impl_->startup_ms;
+  status.startup_keyframes_integrated = impl_->startup_keyframes_integrated;
   return status;
 }
 

@@ -55,6 +55,14 @@ struct MapServerConfig {
   double max_query_volume_m3 = 1000.0;
   /// Most voxels one occupancy query lists.
   int max_listed_voxels = 1000000;
+  /// The OctoMap is checkpointed to the store after this many new keyframes, after every
+  /// regeneration and at shutdown, so that a restart loads it instead of re-integrating every
+  /// keyframe (about 0.35 s each). 0: never.
+  int checkpoint_every_keyframes = 20;
+  /// ... and only once the mapping work since the last checkpoint is at least this many times
+  /// what saving that checkpoint took: a large map, slower to save, is saved less often, and
+  /// saving never takes more than about 1 / (1 + this) of the mapping thread's time.
+  double checkpoint_work_ratio = 10.0;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
@@ -137,6 +145,12 @@ struct ServerStatus {
   std::string database;
   std::uint64_t database_bytes = 0;
   double uptime_s = 0.0;
+  std::uint64_t checkpoint_version = 0;  ///< of the OctoMap checkpoint in the store (0: none)
+  double last_checkpoint_ms = 0.0;       ///< writing and storing the last checkpoint
+  double startup_ms = 0.0;               ///< opening the store and restoring the map
+  /// Keyframes integrated into the OctoMap at start: all of them without a usable checkpoint,
+  /// only those after it otherwise.
+  int startup_keyframes_integrated = 0;
 };
 
 /// The mapping server without transport: a durable store, one mapping thread that applies

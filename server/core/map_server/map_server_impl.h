@@ -66,11 +66,23 @@ struct MapServer::Impl {
   std::deque<MapChange> changes;
   std::uint64_t history_start = 0;  // changes after this version are all remembered
 
+  // OctoMap checkpoints (mapping thread, and Open before it starts).
+  int keyframes_since_checkpoint = 0;
+  double mapping_ms_since_checkpoint = 0.0;  // mapping thread time spent on keyframes since
+  bool checkpoint_due = false;  // after a regeneration
+  std::atomic<std::uint64_t> checkpoint_version{0};
+  std::atomic<double> last_checkpoint_ms{0.0};
+  double startup_ms = 0.0;
+  int startup_keyframes_integrated = 0;
+
   std::atomic<bool> regenerating{false};
   std::atomic<double> last_regeneration_ms{0.0};
   std::atomic<std::uint64_t> last_regeneration_version{0};
 
   void Run();
+  /// Saves the OctoMap checkpoint when it is due (`force`: whenever keyframes were added or the
+  /// map regenerated since the last one). A failure only costs the next start its speed.
+  void MaybeCheckpoint(bool force);
   MapJob::Result ApplyKeyframe(MapJob* job);
   MapJob::Result ApplyPoses(MapJob* job);
   void Publish(std::shared_ptr<const MapSnapshot> next, MapChange change);

@@ -171,7 +171,8 @@ ServiceStatus MapServer::IsFree(const Eigen::Vector3d& min_W, const Eigen::Vecto
                                 bool unknown_is_free, bool* free, RegionOccupancy* counts,
                                 std::vector<ObjectId>* objects_inside,
                                 std::uint64_t* version) const {
-  // The snapshot is taken first: objects of this version or later, never of an older one.
+  // Objects from one snapshot; the OctoMap is read live, so the version reported (read by
+  // QueryOccupancy) is that snapshot's or a newer one.
   const std::shared_ptr<const MapSnapshot> snapshot = impl_->Current();
   ServiceStatus status = QueryOccupancy(min_W, max_W, 0.0, false, 0, counts, version);
   if (!status.ok()) return status;

@@ -20,7 +20,8 @@ StoredKeyframe MakeStoredKeyframe(const RgbdFrame& frame, const std::vector<Dete
   return stored;
 }
 
-void RestoreMapper(StoredMap stored, Mapper* mapper, std::set<KeyframeId>* known_keyframes) {
+RestoreOutcome RestoreMapper(StoredMap stored, std::optional<StoredCheckpoint> checkpoint,
+                             Mapper* mapper, std::set<KeyframeId>* known_keyframes) {
   std::map<KeyframeId, KeyframeRecord> records;
   for (StoredKeyframe& keyframe : stored.keyframes) {
     KeyframeRecord& record = records[keyframe.id];
@@ -34,7 +35,13 @@ void RestoreMapper(StoredMap stored, Mapper* mapper, std::set<KeyframeId>* known
   for (StoredObservation& row : stored.observations) {
     observations[row.object_id].push_back(std::move(row.observation));
   }
-  mapper->Restore(std::move(records), std::move(observations), stored.next_object_id);
+  if (!checkpoint) {
+    return mapper->Restore(std::move(records), std::move(observations), stored.next_object_id);
+  }
+  OccupancyCheckpoint occupancy{std::move(checkpoint->occupancy_state),
+                                std::move(checkpoint->keyframe_poses)};
+  return mapper->Restore(std::move(records), std::move(observations), stored.next_object_id,
+                         &occupancy);
 }
 
 }  // namespace objmap

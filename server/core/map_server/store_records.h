@@ -1,6 +1,7 @@
 #pragma once
 // Private to map_server: conversions between the mapper's state and the store's rows.
 
+#include <optional>
 #include <set>
 
 #include "mapper/mapper.h"
@@ -14,7 +15,9 @@ namespace objmap {
                                                 const std::vector<Detection>& detections,
                                                 KeyframeId id, const KeyframeRecord& record);
 
-/// Rebuilds `mapper` from everything stored; `known_keyframes` receives the keyframe ids.
-void RestoreMapper(StoredMap stored, Mapper* mapper, std::set<KeyframeId>* known_keyframes);
+/// Rebuilds `mapper` from everything stored, the OctoMap from the checkpoint when it is usable
+/// (Mapper::Restore); `known_keyframes` receives the keyframe ids.
+RestoreOutcome RestoreMapper(StoredMap stored, std::optional<StoredCheckpoint> checkpoint,
+                             Mapper* mapper, std::set<KeyframeId>* known_keyframes);
 
 }  // namespace objmap

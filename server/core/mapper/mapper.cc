@@ -135,6 +135,7 @@ struct Mapper::Impl {
   void MergeDuplicates(KeyframeResult* result);
   KeyframePoseLookup PoseLookup() const;
   void RebuildOccupancy();
+  bool RestoreOccupancy(const OccupancyCheckpoint& checkpoint, int* integrated, std::string* why);
 };
 
 void Mapper::Impl::Associate(std::vector<SegmentedDetection>* segmented,
@@ -175,6 +176,42 @@ KeyframePoseLookup Mapper::Impl::PoseLookup() const {
     if (it == keyframes.end()) return std::nullopt;
     return it->second.T_W_C;
   };
+}
+
+// The checkpoint's OctoMap plus the keyframes after it, when the checkpoint still describes the
+// keyframes it holds; false with the reason otherwise (the map is then untouched).
+bool Mapper::Impl::RestoreOccupancy(const OccupancyCheckpoint& checkpoint, int* integrated,
+                                    std::string* why) {
+  const KeyframeId last = checkpoint.keyframe_poses.empty()
+                              ? 0
+                              : checkpoint.keyframe_poses.rbegin()->first;
+  for (const auto& [id, record] : keyframes) {
+    if (id > last) break;
+    auto it = checkpoint.keyframe_poses.find(id);
+    if (it == checkpoint.keyframe_poses.end()) {
+      *why = "keyframe " + std::to_string(id) + " is not in the checkpoint";
+      return false;
+    }
+    if (!IsSamePose(it->second, record.T_W_C)) {
+      *why = "keyframe " + std::to_string(id) + " moved since the checkpoint";
+      return false;
+    }
+  }
+  for (const auto& [id, pose] : checkpoint.keyframe_poses) {
+    if (keyframes.count(id) == 0) {
+      *why = "the checkpoint holds keyframe " + std::to_string(id) + ", which is not stored";
+      return false;
+    }
+  }
+  auto restored = std::make_unique<OccupancyMap>(config.occupancy);
+  if (!restored->ReadState(checkpoint.state, why)) return false;
+  *integrated = 0;
+  for (auto it = keyframes.upper_bound(last); it != keyframes.end(); ++it, ++*integrated) {
+    restored->Integrate(ToScan(it->second));
+  }
+  std::unique_lock<std::shared_mutex> lock(occupancy_mutex);
+  occupancy.swap(restored);
+  return true;
 }
 
 // Built off to the side so readers keep the previous map until the swap.
@@ -252,15 +289,31 @@ bool Mapper::UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses, s
   return true;
 }
 
-void Mapper::Restore(std::map<KeyframeId, KeyframeRecord> keyframes,
-                     std::map<ObjectId, std::vector<ObjectObservation>> observations,
-                     ObjectId next_object_id) {
+RestoreOutcome Mapper::Restore(std::map<KeyframeId, KeyframeRecord> keyframes,
+                               std::map<ObjectId, std::vector<ObjectObservation>> observations,
+                               ObjectId next_object_id, const OccupancyCheckpoint* checkpoint) {
   impl_->keyframes = std::move(keyframes);
   impl_->next_keyframe_id =
       impl_->keyframes.empty() ? 1 : impl_->keyframes.rbegin()->first + 1;
   impl_->objects.Restore(std::move(observations), next_object_id, impl_->PoseLookup());
   impl_->associator = Associator(impl_->config.association);  // caches of the old objects
+  RestoreOutcome outcome;
+  if (checkpoint != nullptr &&
+      impl_->RestoreOccupancy(*checkpoint, &outcome.keyframes_integrated,
+                              &outcome.checkpoint_refused)) {
+    outcome.from_checkpoint = true;
+    return outcome;
+  }
   impl_->RebuildOccupancy();
+  outcome.keyframes_integrated = static_cast<int>(impl_->keyframes.size());
+  return outcome;
+}
+
+OccupancyCheckpoint Mapper::MakeOccupancyCheckpoint() const {
+  OccupancyCheckpoint checkpoint;
+  checkpoint.state = impl_->occupancy->WriteState();
+  for (const auto& [id, record] : impl_->keyframes) checkpoint.keyframe_poses[id] = record.T_W_C;
+  return checkpoint;
 }
 
 const KeyframeRecord* Mapper::FindKeyframe(KeyframeId id) const {

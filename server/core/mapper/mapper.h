@@ -101,6 +101,19 @@ struct KeyframeRecord {
   std::vector<std::uint8_t> object_mask;   ///< row-major, 1: the pixel belongs to an object
 };
 
+/// The OctoMap with the poses its keyframes were integrated with (Mapper::Restore).
+struct OccupancyCheckpoint {
+  std::string state;  ///< OccupancyMap::WriteState()
+  std::map<KeyframeId, Eigen::Isometry3d> keyframe_poses;
+};
+
+/// What Mapper::Restore did with the OctoMap.
+struct RestoreOutcome {
+  bool from_checkpoint = false;
+  int keyframes_integrated = 0;     ///< keyframes whose rays were cast (those after the checkpoint)
+  std::string checkpoint_refused;   ///< why a given checkpoint was not used; empty otherwise
+};
+
 /// The facade of the core: keyframes in, objects and occupancy out (paper Fig. 3).
 /// Thread-safety: the writers (AddKeyframe, UpdatePoses, Restore) and every other method must be
 /// called from one thread at a time, except ReadOccupancy, which may run on any thread at any
@@ -129,10 +142,17 @@ class Mapper {
                                  std::string* why, int* moved = nullptr);
 
   /// Replaces the whole state by stored keyframes and object observations (a restart): object
-  /// models and the OctoMap are rebuilt from them; keyframe ids continue after the largest one.
-  void Restore(std::map<KeyframeId, KeyframeRecord> keyframes,
-               std::map<ObjectId, std::vector<ObjectObservation>> observations,
-               ObjectId next_object_id);
+  /// models are rebuilt from them; keyframe ids continue after the largest one. The OctoMap is
+  /// loaded from `checkpoint` (may be null) when it is usable: OccupancyMap state at this
+  /// resolution, every keyframe in it still has the pose it was integrated with (within the
+  /// same-pose tolerance of UpdatePoses) and no keyframe up to its last one is missing; then only
+  /// later keyframes are integrated into it. Otherwise every keyframe is integrated anew.
+  RestoreOutcome Restore(std::map<KeyframeId, KeyframeRecord> keyframes,
+                         std::map<ObjectId, std::vector<ObjectObservation>> observations,
+                         ObjectId next_object_id, const OccupancyCheckpoint* checkpoint = nullptr);
+
+  /// The OctoMap as a checkpoint for a later Restore (writer's thread).
+  [[nodiscard]] OccupancyCheckpoint MakeOccupancyCheckpoint() const;
 
   /// The stored record of a keyframe, or nullptr.
   [[nodiscard]] const KeyframeRecord* FindKeyframe(KeyframeId id) const;

@@ -5,6 +5,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <sstream>
 #include <utility>
 
 #include "occupancy/batch_octree.h"
@@ -189,6 +192,61 @@ void OccupancyMap::ApplyPreparedScan() {
 }
 
 const IntegrationStats& OccupancyMap::last_stats() const { return impl_->stats; }
+
+namespace {
+
+// WriteState() bytes: "objmap occupancy state 1 <resolution> <bytes> <checksum>\n" and then
+// OctoMap's node data. The length and checksum are checked before OctoMap reads the data,
+// because its reader trusts the stream (a truncated one would make it read garbage).
+constexpr char kStateFormat[] = "objmap occupancy state 1";
+
+// FNV-1a, 64 bit.
+std::uint64_t Checksum(const char* data, std::size_t size) {
+  std::uint64_t hash = 14695981039346656037ull;
+  for (std::size_t i = 0; i < size; ++i) {
+    hash ^= static_cast<unsigned char>(data[i]);
+    hash *= 1099511628211ull;
+  }
+  return hash;
+}
+
+std::string StateHeader(double resolution_m, std::size_t bytes, std::uint64_t checksum) {
+  char header[128];
+  std::snprintf(header, sizeof(header), "%s %.17g %zu %016llx\n", kStateFormat, resolution_m,
+                bytes, static_cast<unsigned long long>(checksum));
+  return header;
+}
+
+}  // namespace
+
+std::string OccupancyMap::WriteState() const {
+  std::ostringstream data;
+  if (impl_->tree.size() > 0) impl_->tree.writeData(data);
+  const std::string nodes = data.str();
+  return StateHeader(impl_->config.resolution_m, nodes.size(),
+                     Checksum(nodes.data(), nodes.size())) +
+         nodes;
+}
+
+bool OccupancyMap::ReadState(const std::string& bytes, std::string* why) {
+  const std::size_t line_end = bytes.find('\n');
+  const std::string header = bytes.substr(0, line_end == std::string::npos ? 0 : line_end + 1);
+  const std::size_t nodes_size = bytes.size() - header.size();
+  const char* nodes = bytes.data() + header.size();
+  const std::string expected =
+      StateHeader(impl_->config.resolution_m, nodes_size, Checksum(nodes, nodes_size));
+  if (header != expected) {
+    *why = "occupancy state: header '" + header.substr(0, 96) + "' does not match '" +
+           expected.substr(0, expected.size() - 1) +
+           "' (another resolution, or truncated or corrupt data)";
+    return false;
+  }
+  impl_->tree.clear();
+  if (nodes_size == 0) return true;  // an empty map
+  std::istringstream stream(std::string(nodes, nodes_size));
+  impl_->tree.readData(stream);
+  return true;
+}
 
 VoxelState OccupancyMap::Query(const Eigen::Vector3d& point_W) const {
   octomap::OcTreeKey key;

@@ -133,6 +133,15 @@ class OccupancyMap {
                                         const Eigen::Vector3d& max_W,
                                         std::size_t* leaf_count) const;
 
+  /// The whole OcTree with its log-odds (OctoMap's full node data, as in .ot files, after a
+  /// line naming the format and the resolution): a checkpoint. ReadState() of these bytes gives
+  /// the same map, and integrating further scans into it gives what integrating them into this
+  /// map would.
+  [[nodiscard]] std::string WriteState() const;
+  /// Replaces the OcTree by one that WriteState() wrote at this map's resolution. False with a
+  /// reason, and the map unchanged, when the bytes are not such a state.
+  [[nodiscard]] bool ReadState(const std::string& bytes, std::string* why);
+
   /// Writes the map as a standard OctoMap binary file (.bt, opens in octovis).
   [[nodiscard]] bool WriteBinary(const std::string& path, std::string* why) const;
 

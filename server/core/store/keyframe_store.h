@@ -73,6 +73,14 @@ struct StoreChange {
   std::optional<ObjectId> next_object_id;
 };
 
+/// The OctoMap as of a map version, with the poses its keyframes were integrated with, so that a
+/// restart loads it instead of re-integrating them (when those poses still hold).
+struct StoredCheckpoint {
+  std::uint64_t map_version = 0;
+  std::map<KeyframeId, Eigen::Isometry3d> keyframe_poses;
+  std::string occupancy_state;  ///< OccupancyMap::WriteState()
+};
+
 /// Everything the store holds, in id order: what a restart rebuilds the map from.
 struct StoredMap {
   std::vector<StoredKeyframe> keyframes;      ///< ascending id
@@ -117,6 +125,12 @@ class KeyframeStore {
 
   /// Loads everything (restart, regeneration from disk).
   [[nodiscard]] bool LoadAll(StoredMap* map, std::string* why) const;
+
+  /// Replaces the checkpoint (one transaction). False with a reason, the old one kept, otherwise.
+  [[nodiscard]] bool SaveCheckpoint(const StoredCheckpoint& checkpoint, std::string* why);
+  /// The checkpoint, or nullopt when there is none; false with a reason when it is corrupt.
+  [[nodiscard]] bool LoadCheckpoint(std::optional<StoredCheckpoint>* checkpoint,
+                                    std::string* why) const;
   /// Loads one keyframe; false with "unknown keyframe id N" when absent.
   [[nodiscard]] bool LoadKeyframe(KeyframeId id, StoredKeyframe* keyframe, std::string* why) const;
 
@@ -137,7 +151,8 @@ class KeyframeStore {
   [[nodiscard]] KeyframeBytes BytesOf(KeyframeId id) const;
 
   [[nodiscard]] const std::string& path() const;
-  static constexpr int kSchemaVersion = 1;
+  /// 2 added the occupancy checkpoint; a version 1 file is migrated when opened.
+  static constexpr int kSchemaVersion = 2;
 
  private:
   KeyframeStore();

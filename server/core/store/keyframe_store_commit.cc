@@ -237,4 +237,32 @@ bool KeyframeStore::Commit(const StoreChange& change, std::string* why) {
   return ok;
 }
 
+bool KeyframeStore::SaveCheckpoint(const StoredCheckpoint& checkpoint, std::string* why) {
+  Bytes poses;
+  poses.reserve(checkpoint.keyframe_poses.size() * (8 + 16 * 8));
+  for (const auto& [id, T_W_C] : checkpoint.keyframe_poses) {
+    const std::int64_t packed_id = id;
+    const auto* id_bytes = reinterpret_cast<const std::uint8_t*>(&packed_id);
+    poses.insert(poses.end(), id_bytes, id_bytes + sizeof(packed_id));
+    const Bytes pose = store_internal::PackPose(T_W_C);
+    poses.insert(poses.end(), pose.begin(), pose.end());
+  }
+  std::lock_guard<std::mutex> lock(impl_->write_mutex);
+  Connection* db = impl_->writer.get();
+  std::string reason;
+  auto insert = db->Prepare(
+      "INSERT OR REPLACE INTO occupancy_checkpoint(id, map_version, keyframe_poses, state)"
+      " VALUES (1, ?, ?, ?)",
+      "save checkpoint", &reason);
+  bool done = false;
+  const bool ok =
+      insert &&
+      insert->Bind(1, static_cast<std::int64_t>(checkpoint.map_version))
+          .BindBlob(2, poses.data(), poses.size())
+          .BindBlob(3, checkpoint.occupancy_state.data(), checkpoint.occupancy_state.size())
+          .Step(&done, &reason);
+  if (!ok) *why = "checkpoint not saved: " + reason;
+  return ok;
+}
+
 }  // namespace objmap

@@ -2,6 +2,7 @@
 // consistent snapshot while Commit goes on), images decoded afterwards, in parallel.
 
 #include <algorithm>
+#include <cstring>
 #include <thread>
 
 #include "store/keyframe_codec.h"
@@ -238,6 +239,43 @@ bool KeyframeStore::ListKeyframes(KeyframeId first_id, std::size_t max_count,
       return false;
     }
   }
+}
+
+bool KeyframeStore::LoadCheckpoint(std::optional<StoredCheckpoint>* checkpoint,
+                                   std::string* why) const {
+  checkpoint->reset();
+  auto reader = impl_->readers->Acquire(why);
+  if (!reader) return false;
+  auto row = reader.get()->Prepare(
+      "SELECT map_version, keyframe_poses, state FROM occupancy_checkpoint WHERE id = 1",
+      "load checkpoint", why);
+  bool has_row = false;
+  if (!row || !row->Step(&has_row, why)) return false;
+  if (!has_row) return true;
+  StoredCheckpoint loaded;
+  loaded.map_version = static_cast<std::uint64_t>(row->Int64(0));
+  std::size_t poses_bytes = 0, state_bytes = 0;
+  const std::uint8_t* poses = row->Blob(1, &poses_bytes);
+  const std::uint8_t* state = row->Blob(2, &state_bytes);
+  constexpr std::size_t kEntryBytes = 8 + 16 * 8;
+  if (poses_bytes % kEntryBytes != 0) {
+    *why = impl_->path + ": checkpoint: keyframe_poses blob of " + std::to_string(poses_bytes) +
+           " bytes is not a whole number of entries";
+    return false;
+  }
+  for (std::size_t offset = 0; offset < poses_bytes; offset += kEntryBytes) {
+    std::int64_t id = 0;
+    std::memcpy(&id, poses + offset, sizeof(id));
+    Eigen::Isometry3d T_W_C;
+    if (!store_internal::UnpackPose(poses + offset + 8, kEntryBytes - 8, &T_W_C)) {
+      *why = impl_->path + ": checkpoint: corrupt pose of keyframe " + std::to_string(id);
+      return false;
+    }
+    loaded.keyframe_poses[id] = T_W_C;
+  }
+  loaded.occupancy_state.assign(reinterpret_cast<const char*>(state), state_bytes);
+  *checkpoint = std::move(loaded);
+  return true;
 }
 
 }  // namespace objmap

@@ -6,9 +6,10 @@ namespace objmap {
 namespace store_internal {
 namespace {
 
-// The schema of version 1. Comments stay in sqlite_master, so `sqlite3 map.db .schema` documents
-// the blob layouts (all little-endian).
-const char kSchemaSql[] = R"sql(
+// The schema of version 1; later versions are the migrations below, so a new file and a
+// migrated one have the same schema. Comments stay in sqlite_master, so `sqlite3 map.db .schema`
+// documents the blob layouts (all little-endian).
+const char kSchemaV1Sql[] = R"sql(
 CREATE TABLE meta(
   key TEXT PRIMARY KEY NOT NULL,  -- map_version, next_object_id
   value INTEGER NOT NULL
@@ -55,7 +56,36 @@ CREATE TABLE objects(        -- derived summaries, for inspection
 INSERT INTO meta(key, value) VALUES ('map_version', 0), ('next_object_id', 1);
 )sql";
 
-const char* const kTables[] = {"meta", "keyframes", "observations", "objects"};
+// Version 2: a restart loads the OctoMap instead of re-integrating every keyframe.
+const char kSchemaV2Sql[] = R"sql(
+CREATE TABLE occupancy_checkpoint(  -- at most one row: the OctoMap as of a map version
+  id INTEGER PRIMARY KEY CHECK (id = 1),
+  map_version INTEGER NOT NULL,
+  keyframe_poses BLOB NOT NULL,  -- per keyframe in it: id (int64), T_W_C (16 float64, col-major)
+  state BLOB NOT NULL            -- the OcTree with its log-odds (OccupancyMap::WriteState)
+);
+)sql";
+
+// kMigrations[v - 1] takes schema version v to v + 1.
+const char* const kMigrations[] = {kSchemaV2Sql};
+
+const char* const kTables[] = {"meta", "keyframes", "observations", "objects",
+                               "occupancy_checkpoint"};
+
+// Runs the migrations from schema version `from` to this build's.
+bool ApplyMigrations(Connection* db, std::int64_t from, std::string* why) {
+  static_assert(sizeof(kMigrations) / sizeof(kMigrations[0]) == KeyframeStore::kSchemaVersion - 1,
+                "one migration per schema version");
+  for (std::int64_t v = from; v < KeyframeStore::kSchemaVersion; ++v) {
+    if (!db->Exec(kMigrations[v - 1], why)) return false;
+  }
+  return true;
+}
+
+// The whole schema of this build.
+bool CreateSchema(Connection* db, std::string* why) {
+  return db->Exec(kSchemaV1Sql, why) && ApplyMigrations(db, 1, why);
+}
 
 // "name type notnull pk" of each column of `table`, in order; empty when the table is missing.
 bool DescribeTable(Connection* db, const std::string& table, std::string* description,
@@ -79,7 +109,7 @@ bool DescribeTable(Connection* db, const std::string& table, std::string* descri
 bool CheckTables(Connection* db, std::string* why) {
   std::string ignored;
   auto expected = Connection::Open(":memory:", SQLITE_OPEN_READWRITE, 0, &ignored);
-  if (!expected || !expected->Exec(kSchemaSql, why)) return false;
+  if (!expected || !CreateSchema(expected.get(), why)) return false;
   for (const char* table : kTables) {
     std::string want, have;
     if (!DescribeTable(expected.get(), table, &want, why) ||
@@ -117,11 +147,25 @@ bool CreateIfEmpty(Connection* db, std::string* why) {
       db->QueryInt("PRAGMA user_version", &version, why) &&
       db->QueryInt("SELECT count(*) FROM sqlite_master", &tables, why) &&
       (version != 0 || tables != 0 ||
-       (db->Exec(kSchemaSql, why) &&
+       (CreateSchema(db, why) &&
         db->Exec("PRAGMA application_id = " + std::to_string(kApplicationId), why) &&
         db->Exec("PRAGMA user_version = " + std::to_string(KeyframeStore::kSchemaVersion), why))) &&
       db->Exec("COMMIT", why);
   if (!ok) db->RollbackIfOpen();
+  return ok;
+}
+
+// Takes an objmap database of an older schema version to this build's, in one transaction.
+bool Migrate(Connection* db, std::int64_t from_version, std::string* why) {
+  if (!db->Exec("BEGIN IMMEDIATE", why)) return false;
+  const bool ok =
+      ApplyMigrations(db, from_version, why) &&
+      db->Exec("PRAGMA user_version = " + std::to_string(KeyframeStore::kSchemaVersion), why) &&
+      db->Exec("COMMIT", why);
+  if (!ok) {
+    db->RollbackIfOpen();
+    *why = "migration from schema version " + std::to_string(from_version) + " failed: " + *why;
+  }
   return ok;
 }
 
@@ -143,13 +187,14 @@ bool CheckOrCreate(Connection* db, std::string* why) {
            ", user_version " + std::to_string(version) + ")";
     return false;
   }
-  if (version != KeyframeStore::kSchemaVersion) {
-    *why = "schema version " + std::to_string(version) +
-           (version > KeyframeStore::kSchemaVersion ? " is newer than" : " has no migration to") +
-           " this build's version " + std::to_string(KeyframeStore::kSchemaVersion);
+  if (version > KeyframeStore::kSchemaVersion) {
+    *why = "schema version " + std::to_string(version) + " is newer than this build's version " +
+           std::to_string(KeyframeStore::kSchemaVersion);
     return false;
   }
-  return QuickCheck(db, why) && CheckTables(db, why);
+  if (!QuickCheck(db, why)) return false;
+  if (version < KeyframeStore::kSchemaVersion && !Migrate(db, version, why)) return false;
+  return CheckTables(db, why);
 }
 
 // WAL lets readers run alongside the writer; in WAL mode synchronous=NORMAL already survives
@@ -162,8 +207,11 @@ bool Configure(Connection* db, const KeyframeStoreConfig& config, std::string* w
     *why = "cannot switch to WAL journal mode (journal mode " + mode->Text(0) + ")";
     return false;
   }
+  // An OctoMap checkpoint is one large transaction; the WAL grows to hold it and is cut back to
+  // this size once checkpointed into the database, instead of keeping its largest size.
   return db->Exec("PRAGMA synchronous = " + config.synchronous, why) &&
-         db->Exec("PRAGMA foreign_keys = ON", why);
+         db->Exec("PRAGMA foreign_keys = ON", why) &&
+         db->Exec("PRAGMA journal_size_limit = 16777216", why);
 }
 
 }  // namespace
