@@ -35,8 +35,10 @@ using Clock = std::chrono::steady_clock;
 using testing::ServerProcess;
 
 constexpr int kKeyframes = 52;
-// The second server is killed while it works on the keyframe after this many acknowledgements.
-constexpr int kAcknowledgedBeforeKill = 20;
+// The second server is killed while it works on the keyframe after this many acknowledgements:
+// past its first OctoMap checkpoint (after 20 keyframes), so that the restart loads the
+// checkpoint and integrates the keyframes after it.
+constexpr int kAcknowledgedBeforeKill = 25;
 constexpr std::chrono::seconds kStartTimeout{300};
 
 const std::string kModelPath = std::string(OBJMAP_MODEL_DIR) + "/centernet_coco.pb";
@@ -157,6 +159,8 @@ class ServerIntegration : public ::testing::Test {
     std::unique_ptr<MapClient> client;
     // inventory_after[n]: the inventory once n keyframes were acknowledged.
     std::vector<InventoryIds> inventory_after;
+    // The OctoMap (.bt) once n keyframes were acknowledged, for the n the killed server may hold.
+    std::map<int, std::string> octomap_after;
     double ingest_s = 0.0;
   };
   static Shared& shared() {
@@ -208,6 +212,15 @@ class ServerIntegration : public ::testing::Test {
         return;
       }
       s.inventory_after.push_back(inventory);
+      if (i + 1 == kAcknowledgedBeforeKill || i + 1 == kAcknowledgedBeforeKill + 1) {
+        v1::GetOctomapResponse octomap;
+        status = s.client->GetOctomap(v1::GetOctomapRequest(), &octomap);
+        if (!status.ok()) {
+          s.setup_error = "GetOctomap: " + DescribeStatus(status);
+          return;
+        }
+        s.octomap_after[i + 1] = octomap.bt();
+      }
     }
     s.ingest_s = std::chrono::duration<double>(Clock::now() - start).count();
     std::cout << "ingested " << kKeyframes << " keyframes in " << s.ingest_s << " s; inventory: "
@@ -545,8 +558,18 @@ TEST_F(ServerIntegration, KilledDuringIngestKeepsEveryAcknowledgedKeyframeAndThe
   EXPECT_EQ(inventory, s.inventory_after[stored])
       << "restarted: " << Describe(inventory)
       << "\nuninterrupted: " << Describe(s.inventory_after[stored]);
+  // The same OctoMap, byte for byte, as the uninterrupted server had after as many keyframes,
+  // whether the restart loaded a checkpoint or integrated the keyframes again.
+  v1::GetOctomapResponse octomap;
+  ASSERT_TRUE(restarted.GetOctomap(v1::GetOctomapRequest(), &octomap).ok());
+  ASSERT_EQ(s.octomap_after.count(static_cast<int>(stored)), 1u);
+  EXPECT_TRUE(octomap.bt() == s.octomap_after[static_cast<int>(stored)])
+      << "the restarted OctoMap differs from the uninterrupted one";
   std::cout << "killed after " << acked << " acknowledged keyframes; " << stored
-            << " stored; inventory " << Describe(inventory) << std::endl;
+            << " stored; inventory " << Describe(inventory) << "; restart took "
+            << status.startup_ms() << " ms, " << status.startup_keyframes_integrated()
+            << " keyframes integrated (checkpoint of version " << status.checkpoint_version()
+            << ")" << std::endl;
   EXPECT_EQ(server->Kill(SIGTERM), 0) << server->Log();
 }
 
