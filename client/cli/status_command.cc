@@ -21,6 +21,16 @@ std::string Regeneration(const v1::StatusResponse& status) {
   return text;
 }
 
+std::string Checkpoint(const v1::StatusResponse& status) {
+  if (status.checkpoint_version() == 0) return "none";
+  std::string text = "OctoMap of version " + std::to_string(status.checkpoint_version());
+  // Zero when this run has not saved one yet (it was loaded at start).
+  if (status.last_checkpoint_ms() > 0.0) {
+    text += " (saved in " + std::to_string(std::lround(status.last_checkpoint_ms())) + " ms)";
+  }
+  return text;
+}
+
 std::string Startup(const v1::StatusResponse& status) {
   char text[128];
   std::snprintf(text, sizeof(text), "%.1f s, %d keyframes integrated into the OctoMap",
@@ -62,13 +72,7 @@ int RunStatusCommand(int argc, char** argv) {
             << "ingest queue:  " << status.ingest_queue() << "\n"
             << "regeneration:  " << Regeneration(status) << "\n"
             << "database:      " << status.database() << " (" << database_mib << ")\n"
-            << "checkpoint:    "
-            << (status.checkpoint_version() == 0
-                    ? std::string("none")
-                    : "OctoMap of version " + std::to_string(status.checkpoint_version()) +
-                          " (saved in " + std::to_string(std::lround(status.last_checkpoint_ms())) +
-                          " ms)")
-            << "\n"
+            << "checkpoint:    " << Checkpoint(status) << "\n"
             << "startup:       " << Startup(status) << "\n"
             << "uptime:        " << Duration(status.uptime_s()) << "\n";
   return kExitOk;
