@@ -1,6 +1,7 @@
 #include "map_server/map_server.h"
 
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -242,6 +243,50 @@ TEST_F(MapServerScene, WithoutCheckpointsARestartIntegratesEveryKeyframeToTheSam
   config.checkpoint_every_keyframes = -1;
   EXPECT_FALSE(MapServer::Open(config, db_path_, nullptr, &why));
   EXPECT_NE(why.find("checkpoint_every_keyframes"), std::string::npos) << why;
+}
+
+TEST_F(MapServerScene, AKeyframeTheStoreRefusesLeavesNoTraceAndItsIdIsReused) {
+  MapServerConfig config;
+  config.store.busy_timeout_ms = 50;
+  std::string why;
+  auto server = MapServer::Open(config, db_path_, nullptr, &why);
+  ASSERT_TRUE(server) << why;
+  RgbdFrame first = testing::RenderFrame(boxes_, K_, Pose(0), "view-0");
+  AddKeyframeOutcome outcome;
+  ASSERT_TRUE(server->AddKeyframe(first, CupDetections(0), &outcome).ok());
+  const auto cups_before = Cups(*server);
+  std::string octomap_before;
+  std::size_t leaves = 0;
+  std::uint64_t version = 0;
+  ASSERT_TRUE(server->OctomapBytes(std::nullopt, &octomap_before, &leaves, &version).ok());
+
+  // Another program holds the database's write lock: the commit of the next keyframe fails.
+  sqlite3* other = nullptr;
+  ASSERT_EQ(sqlite3_open(db_path_.c_str(), &other), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(other, "BEGIN IMMEDIATE", nullptr, nullptr, nullptr), SQLITE_OK);
+  RgbdFrame second = testing::RenderFrame(boxes_, K_, Pose(1), "view-1");
+  const ServiceStatus refused = server->AddKeyframe(second, CupDetections(1), &outcome);
+  EXPECT_EQ(refused.code, StatusCode::kInternal);
+  EXPECT_NE(refused.message.find("keyframe 2 was mapped but not stored"), std::string::npos)
+      << refused.message;
+  sqlite3_exec(other, "ROLLBACK", nullptr, nullptr, nullptr);
+  sqlite3_close(other);
+
+  // The map is what the store holds: one keyframe, the same cups and OctoMap as before.
+  EXPECT_EQ(server->Status().keyframes, 1u);
+  std::string octomap_after;
+  ASSERT_TRUE(server->OctomapBytes(std::nullopt, &octomap_after, &leaves, &version).ok());
+  EXPECT_EQ(octomap_after, octomap_before);
+  const auto cups_after = Cups(*server);
+  ASSERT_EQ(cups_after.size(), cups_before.size());
+  for (std::size_t i = 0; i < cups_after.size(); ++i) {
+    EXPECT_EQ(cups_after[i]->observations, cups_before[i]->observations);
+  }
+  // Sent again, the keyframe gets the id the refused one had.
+  ASSERT_TRUE(server->AddKeyframe(second, CupDetections(1), &outcome).ok());
+  EXPECT_EQ(outcome.keyframe_id, 2);
+  EXPECT_EQ(server->Status().keyframes, 2u);
+  for (const auto& cup : Cups(*server)) EXPECT_EQ(cup->observations, 2);
 }
 
 TEST_F(MapServerScene, PoseUpdateMovesObjectsAndOccupancy) {

@@ -80,22 +80,13 @@ std::unique_ptr<MapServer> MapServer::Open(const MapServerConfig& config,
   impl.config = config;
   impl.store = KeyframeStore::Open(db_path, config.store, why);
   if (!impl.store) return nullptr;
-  StoredMap stored;
-  std::optional<StoredCheckpoint> checkpoint;
-  if (!impl.store->LoadAll(&stored, why)) {
+  impl.mapper = std::make_unique<Mapper>(config.mapper);
+  std::uint64_t version = 0;
+  if (!impl.RestoreFromStore(&version, why)) {
     *why = "cannot load " + db_path + ": " + *why;
     return nullptr;
   }
-  // A checkpoint that cannot be read is only a slower start: every keyframe is integrated.
-  std::string checkpoint_error;
-  if (!impl.store->LoadCheckpoint(&checkpoint, &checkpoint_error)) checkpoint.reset();
-  if (checkpoint) impl.checkpoint_version = checkpoint->map_version;
-  const std::uint64_t version = stored.map_version;
-  impl.mapper = std::make_unique<Mapper>(config.mapper);
-  const RestoreOutcome restored = RestoreMapper(std::move(stored), std::move(checkpoint),
-                                                impl.mapper.get(), &impl.known_keyframes);
-  impl.startup_keyframes_integrated = restored.keyframes_integrated;
-  impl.keyframes_since_checkpoint = restored.keyframes_integrated;
+  impl.startup_keyframes_integrated = impl.keyframes_since_checkpoint;
   impl.planned_version = version;
   impl.history_start = version;
   impl.snapshot = impl.snapshot_builder.Build(*impl.mapper, version, nullptr);
@@ -105,6 +96,24 @@ std::unique_ptr<MapServer> MapServer::Open(const MapServerConfig& config,
   impl.startup_ms = MillisecondsSince(start);
   impl.worker = std::thread([&impl] { impl.Run(); });
   return server;
+}
+
+bool MapServer::Impl::RestoreFromStore(std::uint64_t* version, std::string* why) {
+  StoredMap stored;
+  if (!store->LoadAll(&stored, why)) return false;
+  // A checkpoint that cannot be read only costs time: every keyframe is integrated.
+  std::optional<StoredCheckpoint> checkpoint;
+  std::string checkpoint_error;
+  if (!store->LoadCheckpoint(&checkpoint, &checkpoint_error)) checkpoint.reset();
+  if (checkpoint) checkpoint_version = checkpoint->map_version;
+  *version = stored.map_version;
+  std::set<KeyframeId> keyframe_ids;
+  const RestoreOutcome restored =
+      RestoreMapper(std::move(stored), std::move(checkpoint), mapper.get(), &keyframe_ids);
+  keyframes_since_checkpoint = restored.keyframes_integrated;
+  std::lock_guard<std::mutex> lock(known_mutex);
+  known_keyframes.swap(keyframe_ids);
+  return true;
 }
 
 std::shared_ptr<const MapSnapshot> MapServer::Impl::Current() const {
@@ -221,6 +230,13 @@ MapJob::Result MapServer::Impl::ApplyKeyframe(MapJob* job) {
   if (!store->Commit(change, &why)) {
     out.status = {StatusCode::kInternal, "keyframe " + std::to_string(result.keyframe_id) +
                                              " was mapped but not stored: " + why};
+    // The mapper now holds a keyframe the store lacks. Rebuilt from the store, the map is again
+    // what a restart would give, and the keyframe's id is handed out again.
+    std::uint64_t stored_version = 0;
+    std::string reload_error;
+    if (!RestoreFromStore(&stored_version, &reload_error)) {
+      out.status.message += "; reloading the map from the store failed too: " + reload_error;
+    }
     return out;
   }
   {

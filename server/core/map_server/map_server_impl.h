@@ -80,6 +80,10 @@ struct MapServer::Impl {
   std::atomic<std::uint64_t> last_regeneration_version{0};
 
   void Run();
+  /// Rebuilds the mapper (and the known keyframe ids) from the store, the OctoMap from its
+  /// checkpoint when usable; `version` receives the stored map version. Mapping thread only
+  /// (or Open, before it starts).
+  bool RestoreFromStore(std::uint64_t* version, std::string* why);
   /// Saves the OctoMap checkpoint when it is due (`force`: whenever keyframes were added or the
   /// map regenerated since the last one). A failure only costs the next start its speed.
   void MaybeCheckpoint(bool force);
