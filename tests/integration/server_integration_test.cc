@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <map>
 #include <mutex>
@@ -571,6 +572,62 @@ TEST_F(ServerIntegration, KilledDuringIngestKeepsEveryAcknowledgedKeyframeAndThe
             << " keyframes integrated (checkpoint of version " << status.checkpoint_version()
             << ")" << std::endl;
   EXPECT_EQ(server->Kill(SIGTERM), 0) << server->Log();
+}
+
+// The objmap command against the same server answers what the API answers.
+TEST_F(ServerIntegration, CliInventoryFreeAndExportAgreeWithTheApi) {
+  const std::string server = " --server " + shared().server->address();
+  const testing::CommandResult inventory = testing::RunObjmap("inventory" + server);
+  ASSERT_EQ(inventory.exit_code, 0) << inventory.output;
+  for (const auto& [name, ids] : shared().inventory_after.back()) {
+    // "cup                  2       0.471": the class and its count on one line.
+    const std::size_t line = inventory.output.find("\n" + name + " ");
+    ASSERT_NE(line, std::string::npos) << name << " missing in:\n" << inventory.output;
+    std::istringstream fields(inventory.output.substr(line + 1 + name.size()));
+    int count = -1;
+    fields >> count;
+    EXPECT_EQ(count, static_cast<int>(ids.size())) << name;
+  }
+
+  Eigen::Vector3d air_min, air_max;
+  std::string problem;
+  AirInFrontOfFirstCamera(&air_min, &air_max, &problem);
+  ASSERT_TRUE(problem.empty()) << problem;
+  std::ostringstream air;
+  air << "free " << air_min.x() << " " << air_min.y() << " " << air_min.z() << " " << air_max.x()
+      << " " << air_max.y() << " " << air_max.z();
+  const testing::CommandResult free = testing::RunObjmap(air.str() + server);
+  EXPECT_EQ(free.exit_code, 0) << free.output;
+  const std::vector<v1::Object> tables = Objects("dining table", false);
+  ASSERT_EQ(tables.size(), 1u);
+  const Eigen::Vector3d c = Vec3FromProto(tables[0].centroid());
+  std::ostringstream table_box;
+  table_box << "free " << c.x() - 0.1 << " " << c.y() - 0.1 << " " << c.z() - 0.1 << " "
+            << c.x() + 0.1 << " " << c.y() + 0.1 << " " << c.z() + 0.1 << " --unknown-is-free";
+  const testing::CommandResult blocked = testing::RunObjmap(table_box.str() + server);
+  EXPECT_EQ(blocked.exit_code, 3) << blocked.output;
+  EXPECT_NE(blocked.output.find(std::to_string(tables[0].id())), std::string::npos)
+      << blocked.output;
+
+  // export: the .bt is the server's OctoMap, and one PLY per confirmed object.
+  const fs::path out = shared().dir / "export";
+  const testing::CommandResult exported = testing::RunObjmap(
+      "export --octomap " + (out / "map.bt").string() + " --objects " + (out / "objects").string() +
+      server);
+  ASSERT_EQ(exported.exit_code, 0) << exported.output;
+  v1::GetOctomapResponse octomap;
+  ASSERT_TRUE(client().GetOctomap(v1::GetOctomapRequest(), &octomap).ok());
+  std::ifstream file(out / "map.bt", std::ios::binary);
+  const std::string written((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  EXPECT_TRUE(written == octomap.bt()) << "map.bt differs from GetOctomap";
+  std::size_t plys = 0;
+  for (const auto& entry : fs::directory_iterator(out / "objects")) {
+    plys += entry.path().extension() == ".ply";
+  }
+  std::size_t confirmed = 0;
+  for (const auto& [name, ids] : shared().inventory_after.back()) confirmed += ids.size();
+  EXPECT_EQ(plys, confirmed);
+  EXPECT_TRUE(fs::exists(out / "objects" / "objects.json"));
 }
 
 TEST_F(ServerIntegration, CliExportsKeyframePosesThatUpdatePosesTakesBackUnmoved) {
