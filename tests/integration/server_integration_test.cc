@@ -538,7 +538,9 @@ TEST_F(ServerIntegration, KilledDuringIngestKeepsEveryAcknowledgedKeyframeAndThe
   ASSERT_TRUE(stored == acked || stored == acked + 1) << stored << " stored, " << acked << " acked";
   for (std::size_t i = 0; i < stored; ++i) {
     const v1::KeyframeInfo& info = listed.keyframes(static_cast<int>(i));
-    if (i < acked) EXPECT_EQ(info.id(), acknowledged[i]);
+    if (i < acked) {
+      EXPECT_EQ(info.id(), acknowledged[i]);
+    }
     EXPECT_EQ(info.name(), s.keyframes[i].name());
     EXPECT_DOUBLE_EQ(info.stamp(), s.keyframes[i].stamp());
     const Eigen::Vector3d sent = Vec3FromProto(s.keyframes[i].t_w_c().translation());
