@@ -20,6 +20,11 @@ namespace objmap {
 [[nodiscard]] bool SaveLabelledPcd(const std::string& path, const OrganizedCloud& cloud,
                                    const std::vector<std::int32_t>& labels, std::string* why);
 
+/// Reads a PLY that WritePly wrote (binary little-endian, x y z float, red green blue uchar);
+/// false with a reason naming the file for anything else.
+[[nodiscard]] bool ReadPly(const std::string& path, std::vector<Eigen::Vector3f>* points,
+                           std::vector<std::array<std::uint8_t, 3>>* colors, std::string* why);
+
 /// Writes a coloured point set as binary little-endian PLY.
 [[nodiscard]] bool WritePly(const std::string& path, const std::vector<Eigen::Vector3f>& points,
                             const std::vector<std::array<std::uint8_t, 3>>& colors,
