@@ -1,0 +1,219 @@
+#include "evaluation/evaluation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <unordered_map>
+
+namespace objmap {
+namespace {
+
+struct Box {
+  Eigen::Vector3d min, max;
+  [[nodiscard]] double Volume() const { return (max - min).cwiseMax(0.0).prod(); }
+};
+
+// Axis-aligned box around a real object's oriented box.
+Box WorldBox(const GroundTruthObject& object) {
+  const Eigen::Vector3d half_extent =
+      object.T_W_B.linear().cwiseAbs() * (0.5 * object.size_m);
+  return {object.T_W_B.translation() - half_extent, object.T_W_B.translation() + half_extent};
+}
+
+double IntersectionVolume(const Box& a, const Box& b) {
+  return (a.max.cwiseMin(b.max) - a.min.cwiseMax(b.min)).cwiseMax(0.0).prod();
+}
+
+double Iou(const Box& a, const Box& b) {
+  const double intersection = IntersectionVolume(a, b);
+  const double united = a.Volume() + b.Volume() - intersection;
+  return united > 0.0 ? intersection / united : 0.0;
+}
+
+// The mapped object can stand for the real one (classes aside).
+bool CanStandFor(const MappedObject& mapped, const GroundTruthObject& real,
+                 const EvaluationConfig& config) {
+  const Eigen::Vector3d c_B = real.T_W_B.inverse() * mapped.centroid_W;
+  const Eigen::Vector3d half = 0.5 * real.size_m + Eigen::Vector3d::Constant(config.centroid_margin_m);
+  if ((c_B.cwiseAbs().array() <= half.array()).all()) return true;
+  return Iou({mapped.min_W, mapped.max_W}, WorldBox(real)) >= config.min_box_iou;
+}
+
+// Nearest-neighbour distances through a hash grid of cell `cell_m` over `targets`.
+class PointGrid {
+ public:
+  PointGrid(const std::vector<Eigen::Vector3f>& targets, double cell_m) : cell_m_(cell_m) {
+    for (const Eigen::Vector3f& p : targets) cells_[Key(Cell(p))].push_back(p);
+  }
+  // Distance to the nearest target, capped at `cap_m` (searched within the cells that reach it).
+  [[nodiscard]] double Distance(const Eigen::Vector3f& p, double cap_m) const {
+    const Eigen::Vector3i centre = Cell(p);
+    const int reach = static_cast<int>(std::ceil(cap_m / cell_m_));
+    double best2 = cap_m * cap_m;
+    for (int dx = -reach; dx <= reach; ++dx) {
+      for (int dy = -reach; dy <= reach; ++dy) {
+        for (int dz = -reach; dz <= reach; ++dz) {
+          auto it = cells_.find(Key(centre + Eigen::Vector3i(dx, dy, dz)));
+          if (it == cells_.end()) continue;
+          for (const Eigen::Vector3f& q : it->second) {
+            best2 = std::min(best2, static_cast<double>((p - q).squaredNorm()));
+          }
+        }
+      }
+    }
+    return std::sqrt(best2);
+  }
+
+ private:
+  [[nodiscard]] Eigen::Vector3i Cell(const Eigen::Vector3f& p) const {
+    return (p.cast<double>() / cell_m_).array().floor().cast<int>();
+  }
+  static std::int64_t Key(const Eigen::Vector3i& c) {
+    constexpr std::int64_t kOffset = 1 << 20;
+    return ((c.x() + kOffset) << 42) | ((c.y() + kOffset) << 21) | (c.z() + kOffset);
+  }
+  double cell_m_;
+  std::unordered_map<std::int64_t, std::vector<Eigen::Vector3f>> cells_;
+};
+
+// Mean capped distance from every point of `from` to `to`; negative when either is empty.
+double MeanDistance(const std::vector<Eigen::Vector3f>& from, const std::vector<Eigen::Vector3f>& to,
+                    double cap_m) {
+  if (from.empty() || to.empty()) return -1.0;
+  const PointGrid grid(to, std::max(0.01, cap_m / 4.0));
+  double sum = 0.0;
+  for (const Eigen::Vector3f& p : from) sum += grid.Distance(p, cap_m);
+  return sum / static_cast<double>(from.size());
+}
+
+}  // namespace
+
+bool EvaluationConfig::IsValid(std::string* why) const {
+  if (!(centroid_margin_m >= 0.0) || !(min_box_iou > 0.0 && min_box_iou <= 1.0) ||
+      !(merge_box_share > 0.0 && merge_box_share <= 1.0) || !(max_model_distance_m > 0.0)) {
+    *why = "EvaluationConfig: centroid_margin_m >= 0, min_box_iou and merge_box_share in (0, 1], "
+           "max_model_distance_m > 0 are required";
+    return false;
+  }
+  return true;
+}
+
+double ClassCounts::Precision() const {
+  const int claims = true_positives + false_positives + duplicates;
+  return claims == 0 ? 1.0 : static_cast<double>(true_positives) / claims;
+}
+
+double ClassCounts::Recall() const {
+  return real == 0 ? 1.0 : static_cast<double>(true_positives) / real;
+}
+
+void ClassCounts::Add(const ClassCounts& other) {
+  real += other.real;
+  mapped += other.mapped;
+  true_positives += other.true_positives;
+  false_positives += other.false_positives;
+  misses += other.misses;
+  duplicates += other.duplicates;
+  merges += other.merges;
+  wrong_labels += other.wrong_labels;
+}
+
+ObjectEvaluation EvaluateObjects(const std::vector<GroundTruthObject>& real,
+                                 const std::vector<MappedObject>& mapped,
+                                 const EvaluationConfig& config) {
+  ObjectEvaluation result;
+  for (const GroundTruthObject& object : real) ++result.per_class[object.class_id].real;
+  // Each mapped object stands for the nearest real object of its class it can stand for.
+  std::map<std::size_t, std::vector<std::size_t>> standing_for;  // real index -> mapped indices
+  for (std::size_t m = 0; m < mapped.size(); ++m) {
+    ClassCounts& counts = result.per_class[mapped[m].class_id];
+    ++counts.mapped;
+    std::size_t best = real.size();
+    double best_distance = std::numeric_limits<double>::infinity();
+    bool on_other_class = false;
+    int covered = 0;
+    const Box mapped_box{mapped[m].min_W, mapped[m].max_W};
+    for (std::size_t r = 0; r < real.size(); ++r) {
+      const bool same_class = real[r].class_id == mapped[m].class_id;
+      const Box real_box = WorldBox(real[r]);
+      if (same_class && real_box.Volume() > 0.0 &&
+          IntersectionVolume(mapped_box, real_box) >= config.merge_box_share * real_box.Volume()) {
+        ++covered;
+      }
+      if (!CanStandFor(mapped[m], real[r], config)) continue;
+      if (!same_class) {
+        on_other_class = true;
+        continue;
+      }
+      const double distance = (mapped[m].centroid_W - real[r].T_W_B.translation()).norm();
+      if (distance < best_distance) {
+        best_distance = distance;
+        best = r;
+      }
+    }
+    if (covered >= 2) ++counts.merges;
+    if (best < real.size()) {
+      standing_for[best].push_back(m);
+    } else {
+      ++counts.false_positives;
+      if (on_other_class) ++counts.wrong_labels;
+    }
+  }
+  std::vector<double> accuracies;
+  for (std::size_t r = 0; r < real.size(); ++r) {
+    ClassCounts& counts = result.per_class[real[r].class_id];
+    auto it = standing_for.find(r);
+    if (it == standing_for.end()) {
+      ++counts.misses;
+      continue;
+    }
+    ++counts.true_positives;
+    counts.duplicates += static_cast<int>(it->second.size()) - 1;
+    // The match is the fullest model; the others are the duplicates.
+    const std::size_t m = *std::max_element(
+        it->second.begin(), it->second.end(), [&](std::size_t a, std::size_t b) {
+          return mapped[a].model_W.size() < mapped[b].model_W.size();
+        });
+    ObjectMatch match;
+    match.real_id = real[r].id;
+    match.mapped_id = mapped[m].id;
+    match.model_to_surface_m =
+        MeanDistance(mapped[m].model_W, real[r].surface_W, config.max_model_distance_m);
+    match.surface_to_model_m =
+        MeanDistance(real[r].surface_W, mapped[m].model_W, config.max_model_distance_m);
+    if (match.model_to_surface_m >= 0.0) accuracies.push_back(match.model_to_surface_m);
+    result.matches.push_back(match);
+  }
+  for (const auto& [class_id, counts] : result.per_class) result.totals.Add(counts);
+  if (!accuracies.empty()) {
+    double sum = 0.0;
+    for (double a : accuracies) sum += a;
+    result.mean_model_to_surface_m = sum / static_cast<double>(accuracies.size());
+  }
+  return result;
+}
+
+std::map<int, ClassCounts> ScoreCounts(const std::map<int, CountRange>& expected,
+                                       const std::map<int, int>& found) {
+  std::map<int, ClassCounts> scores;
+  for (const auto& [class_id, range] : expected) {
+    ClassCounts& counts = scores[class_id];
+    const auto it = found.find(class_id);
+    const int count = it == found.end() ? 0 : it->second;
+    counts.real = std::clamp(count, range.min, range.max);
+    counts.mapped = count;
+    counts.false_positives = std::max(0, count - range.max);
+    counts.misses = std::max(0, range.min - count);
+    counts.true_positives = count - counts.false_positives;
+  }
+  for (const auto& [class_id, count] : found) {
+    if (expected.count(class_id) > 0) continue;
+    ClassCounts& counts = scores[class_id];
+    counts.mapped = count;
+    counts.false_positives = count;
+  }
+  return scores;
+}
+
+}  // namespace objmap

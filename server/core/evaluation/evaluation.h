@@ -1,0 +1,105 @@
+#pragma once
+// Scoring a map against ground truth: objects matched to real objects per class (true and false
+// positives, misses, duplicates, merges, wrong labels, as in the paper's Table I), the accuracy
+// of the object models against the real surfaces, and inventory counts for data without object
+// poses. docs/evaluation.md defines every figure.
+
+#include <Eigen/Geometry>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "types/frame.h"
+
+namespace objmap {
+
+/// A real object: its class, an oriented box (pose of the box centre, full extents along the
+/// box axes) and points sampled on its surface (may be empty: no model accuracy then).
+struct GroundTruthObject {
+  int id = 0;
+  int class_id = -1;
+  Eigen::Isometry3d T_W_B = Eigen::Isometry3d::Identity();  ///< box frame: centre, axes
+  Eigen::Vector3d size_m = Eigen::Vector3d::Zero();
+  std::vector<Eigen::Vector3f> surface_W;
+};
+
+/// A mapped object as the evaluation sees it: what the map claims (its inventory objects).
+struct MappedObject {
+  ObjectId id = 0;
+  int class_id = -1;
+  Eigen::Vector3d centroid_W = Eigen::Vector3d::Zero();
+  Eigen::Vector3d min_W = Eigen::Vector3d::Zero();  ///< axis-aligned bounds
+  Eigen::Vector3d max_W = Eigen::Vector3d::Zero();
+  std::vector<Eigen::Vector3f> model_W;  ///< the point model (may be empty)
+};
+
+struct EvaluationConfig {
+  /// A mapped object can stand for a real one of its class when its centroid lies in the real
+  /// object's box grown by this margin on every side (partly seen objects have off-centre
+  /// centroids), or when their axis-aligned boxes overlap by at least min_box_iou.
+  double centroid_margin_m = 0.05;
+  double min_box_iou = 0.25;
+  /// A mapped object merges real objects when its axis-aligned box holds at least this share of
+  /// the axis-aligned boxes of two or more real objects of its class.
+  double merge_box_share = 0.5;
+  /// Model distances are capped here (a model point farther from every surface sample counts
+  /// as this far), so one stray point cannot dominate the mean.
+  double max_model_distance_m = 0.1;
+
+  [[nodiscard]] bool IsValid(std::string* why) const;
+};
+
+/// Counts of one class (or of all classes, for the totals).
+struct ClassCounts {
+  int real = 0;        ///< real objects
+  int mapped = 0;      ///< mapped objects
+  int true_positives = 0;   ///< real objects that a mapped object stands for
+  int false_positives = 0;  ///< mapped objects that stand for no real object of their class
+  int misses = 0;           ///< real objects no mapped object stands for
+  int duplicates = 0;       ///< mapped objects beyond the first that stand for one real object
+  int merges = 0;           ///< mapped objects that cover two or more real objects
+  int wrong_labels = 0;     ///< false positives that stand on a real object of another class
+
+  [[nodiscard]] double Precision() const;  ///< TP / (TP + FP + duplicates); 1 when nothing mapped
+  [[nodiscard]] double Recall() const;     ///< TP / real; 1 when nothing is real
+  void Add(const ClassCounts& other);
+};
+
+/// One real object and the mapped object that stands for it, with model accuracy.
+struct ObjectMatch {
+  int real_id = 0;
+  ObjectId mapped_id = 0;
+  /// Mean distance from the mapped model's points to the real surface samples (accuracy), and
+  /// from the samples to the model (completeness); negative when either set is empty.
+  double model_to_surface_m = -1.0;
+  double surface_to_model_m = -1.0;
+};
+
+struct ObjectEvaluation {
+  std::map<int, ClassCounts> per_class;  ///< by class id
+  ClassCounts totals;
+  std::vector<ObjectMatch> matches;  ///< one per true positive
+  /// Mean of the matches' model_to_surface_m (those that have one); negative when none.
+  double mean_model_to_surface_m = -1.0;
+};
+
+/// Matches mapped objects to real ones (docs/evaluation.md): each mapped object goes to the
+/// nearest real object of its class that it can stand for; the first one a real object gets is
+/// its match (the one with the most model points), the others are duplicates.
+[[nodiscard]] ObjectEvaluation EvaluateObjects(const std::vector<GroundTruthObject>& real,
+                                               const std::vector<MappedObject>& mapped,
+                                               const EvaluationConfig& config);
+
+/// Expected count of a class for data without object poses: between min and max (inclusive).
+struct CountRange {
+  int min = 0;
+  int max = 0;
+};
+
+/// Scores per-class counts against expected ranges: a count inside the range is all true
+/// positives; above it, the excess are false positives; below it, the shortfall are misses.
+/// Classes found but not expected are all false positives.
+[[nodiscard]] std::map<int, ClassCounts> ScoreCounts(const std::map<int, CountRange>& expected,
+                                                     const std::map<int, int>& found);
+
+}  // namespace objmap

@@ -1,0 +1,218 @@
+#include "evaluation/evaluation_io.h"
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "pointcloud_io/pointcloud_io.h"
+#include "types/coco_classes.h"
+#include "types/frame.h"
+
+namespace objmap {
+namespace {
+
+using Json = nlohmann::json;
+namespace fs = std::filesystem;
+
+bool ParseFile(const std::string& path, Json* document, std::string* why) {
+  std::ifstream in(path);
+  if (!in) {
+    *why = path + ": cannot be opened";
+    return false;
+  }
+  *document = Json::parse(in, nullptr, /*allow_exceptions=*/false);
+  if (document->is_discarded()) {
+    *why = path + ": not valid JSON";
+    return false;
+  }
+  return true;
+}
+
+bool ClassOf(const Json& entry, const std::string& where, int* class_id, std::string* why) {
+  if (!entry.contains("class") || !entry["class"].is_string()) {
+    *why = where + ": \"class\" (a COCO class name) is missing";
+    return false;
+  }
+  *class_id = CocoClassId(entry["class"].get<std::string>());
+  if (*class_id < 0) {
+    *why = where + ": class '" + entry["class"].get<std::string>() + "' is not a COCO class";
+    return false;
+  }
+  return true;
+}
+
+// An array of `n` finite numbers.
+bool Numbers(const Json& value, std::size_t n, std::vector<double>* out) {
+  if (!value.is_array() || value.size() != n) return false;
+  out->clear();
+  for (const Json& v : value) {
+    if (!v.is_number() || !std::isfinite(v.get<double>())) return false;
+    out->push_back(v.get<double>());
+  }
+  return true;
+}
+
+bool Vector3(const Json& value, Eigen::Vector3d* v) {
+  std::vector<double> xyz;
+  if (!Numbers(value, 3, &xyz)) return false;
+  *v = Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
+  return true;
+}
+
+bool ReadGroundTruthObject(const Json& entry, const std::string& where, GroundTruthObject* object,
+                           std::string* why) {
+  if (!entry.is_object() || !entry.contains("id") || !entry["id"].is_number_integer()) {
+    *why = where + ": \"id\" (an integer) is missing";
+    return false;
+  }
+  object->id = entry["id"].get<int>();
+  if (!ClassOf(entry, where, &object->class_id, why)) return false;
+  std::vector<double> pose;
+  if (!entry.contains("pose") || !Numbers(entry["pose"], 16, &pose)) {
+    *why = where + ": \"pose\" must be 16 finite numbers (a 4x4 transform, row by row)";
+    return false;
+  }
+  Eigen::Matrix4d T;
+  for (int i = 0; i < 16; ++i) T(i / 4, i % 4) = pose[i];
+  std::string reason;
+  if (!IsValidRigidTransform(T, &reason)) {
+    *why = where + ": pose: " + reason;
+    return false;
+  }
+  object->T_W_B.matrix() = T;
+  if (!entry.contains("size") || !Vector3(entry["size"], &object->size_m) ||
+      (object->size_m.array() < 0.0).any()) {
+    *why = where + ": \"size\" must be 3 finite numbers >= 0 (metres)";
+    return false;
+  }
+  if (entry.contains("surface_sample")) {
+    const Json& sample = entry["surface_sample"];
+    for (std::size_t i = 0; sample.is_array() && i < sample.size(); ++i) {
+      Eigen::Vector3d p;
+      if (!Vector3(sample[i], &p)) {
+        *why = where + ": surface_sample[" + std::to_string(i) + "] is not 3 finite numbers";
+        return false;
+      }
+      object->surface_W.push_back(p.cast<float>());
+    }
+    if (!sample.is_array()) {
+      *why = where + ": \"surface_sample\" must be an array of [x, y, z]";
+      return false;
+    }
+  }
+  return true;
+}
+
+// One object of objects.json: from `objmap map` ("in_inventory", "bbox_min"/"bbox_max") or from
+// `objmap export` ("confirmed", "bounds": {"min", "max"}, "ply"). `claimed` false: not one the
+// map lists in its inventory.
+bool ReadMappedObject(const Json& entry, const fs::path& dir, const std::string& where,
+                      MappedObject* object, bool* claimed, std::string* why) {
+  if (!entry.is_object() || !entry.contains("id") || !entry["id"].is_number_integer()) {
+    *why = where + ": \"id\" (an integer) is missing";
+    return false;
+  }
+  object->id = entry["id"].get<ObjectId>();
+  if (!ClassOf(entry, where, &object->class_id, why)) return false;
+  const bool from_map = entry.contains("in_inventory");
+  *claimed = entry.value(from_map ? "in_inventory" : "confirmed", false);
+  const bool bounds_ok =
+      Vector3(entry.value("centroid", Json()), &object->centroid_W) &&
+      (from_map ? Vector3(entry.value("bbox_min", Json()), &object->min_W) &&
+                      Vector3(entry.value("bbox_max", Json()), &object->max_W)
+                : entry.contains("bounds") &&
+                      Vector3(entry["bounds"].value("min", Json()), &object->min_W) &&
+                      Vector3(entry["bounds"].value("max", Json()), &object->max_W));
+  if (!bounds_ok) {
+    *why = where + ": centroid and bounds must be 3 finite numbers each";
+    return false;
+  }
+  if (!*claimed) return true;
+  const fs::path ply =
+      from_map ? dir / "objects" /
+                     (std::to_string(object->id) + "_" + CocoClassFileName(object->class_id) + ".ply")
+               : dir / entry.value("ply", std::string());
+  std::error_code error;
+  if (!fs::is_regular_file(ply, error)) return true;  // no model: no model accuracy
+  std::vector<std::array<std::uint8_t, 3>> colors;
+  return ReadPly(ply.string(), &object->model_W, &colors, why);
+}
+
+}  // namespace
+
+bool ReadGroundTruth(const std::string& path, std::vector<GroundTruthObject>* objects,
+                     std::string* why) {
+  objects->clear();
+  Json document;
+  if (!ParseFile(path, &document, why)) return false;
+  if (!document.is_object() || !document.contains("objects") || !document["objects"].is_array()) {
+    *why = path + ": \"objects\" (an array) is missing";
+    return false;
+  }
+  const Json& entries = document["objects"];
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    GroundTruthObject object;
+    if (!ReadGroundTruthObject(entries[i], path + ": objects[" + std::to_string(i) + "]", &object,
+                               why)) {
+      return false;
+    }
+    objects->push_back(std::move(object));
+  }
+  return true;
+}
+
+bool ReadExpectedCounts(const std::string& path, std::map<int, CountRange>* counts,
+                        std::string* why) {
+  counts->clear();
+  Json document;
+  if (!ParseFile(path, &document, why)) return false;
+  if (!document.is_object()) {
+    *why = path + ": expected an object of class: count or class: [min, max]";
+    return false;
+  }
+  for (const auto& [name, value] : document.items()) {
+    const int class_id = CocoClassId(name);
+    if (class_id < 0) {
+      *why = path + ": '" + name + "' is not a COCO class";
+      return false;
+    }
+    CountRange range;
+    if (value.is_number_unsigned()) {
+      range.min = range.max = value.get<int>();
+    } else if (value.is_array() && value.size() == 2 && value[0].is_number_unsigned() &&
+               value[1].is_number_unsigned() && value[0].get<int>() <= value[1].get<int>()) {
+      range.min = value[0].get<int>();
+      range.max = value[1].get<int>();
+    } else {
+      *why = path + ": " + name + ": expected a count >= 0 or a range [min, max]";
+      return false;
+    }
+    (*counts)[class_id] = range;
+  }
+  return true;
+}
+
+bool ReadMapDirectory(const std::string& dir, std::vector<MappedObject>* objects,
+                      std::string* why) {
+  objects->clear();
+  const std::string path = (fs::path(dir) / "objects.json").string();
+  Json document;
+  if (!ParseFile(path, &document, why)) return false;
+  if (!document.is_object() || !document.contains("objects") || !document["objects"].is_array()) {
+    *why = path + ": \"objects\" (an array) is missing";
+    return false;
+  }
+  const Json& entries = document["objects"];
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    MappedObject object;
+    bool claimed = false;
+    if (!ReadMappedObject(entries[i], dir, path + ": objects[" + std::to_string(i) + "]", &object,
+                          &claimed, why)) {
+      return false;
+    }
+    if (claimed) objects->push_back(std::move(object));
+  }
+  return true;
+}
+
+}  // namespace objmap

@@ -1,0 +1,256 @@
+// Matching, counts and model accuracy on hand-made cases, and the evaluation's file readers.
+#include "evaluation/evaluation.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "evaluation/evaluation_io.h"
+#include "pointcloud_io/pointcloud_io.h"
+#include "types/coco_classes.h"
+
+namespace objmap {
+namespace {
+
+namespace fs = std::filesystem;
+
+GroundTruthObject Real(int id, const char* name, const Eigen::Vector3d& centre,
+                       const Eigen::Vector3d& size) {
+  GroundTruthObject object;
+  object.id = id;
+  object.class_id = CocoClassId(name);
+  object.T_W_B.translation() = centre;
+  object.size_m = size;
+  return object;
+}
+
+MappedObject Mapped(ObjectId id, const char* name, const Eigen::Vector3d& min_W,
+                    const Eigen::Vector3d& max_W) {
+  MappedObject object;
+  object.id = id;
+  object.class_id = CocoClassId(name);
+  object.min_W = min_W;
+  object.max_W = max_W;
+  object.centroid_W = 0.5 * (min_W + max_W);
+  return object;
+}
+
+const ClassCounts& Counts(const ObjectEvaluation& evaluation, const char* name) {
+  return evaluation.per_class.at(CocoClassId(name));
+}
+
+// Every case the paper's table names: a duplicate, a merge of two monitors side by side, a miss,
+// a wrong label, a plain false positive.
+TEST(EvaluateObjects, CountsDuplicatesMergesMissesAndWrongLabels) {
+  const Eigen::Vector3d cup_size(0.08, 0.08, 0.1), tv_size(1.0, 0.1, 0.6);
+  const std::vector<GroundTruthObject> real = {
+      Real(1, "cup", {0, 0, 0}, cup_size),
+      Real(2, "cup", {0.5, 0, 0}, cup_size),
+      Real(3, "tv", {2.0, 0, 1}, tv_size),
+      Real(4, "tv", {3.05, 0, 1}, tv_size),
+      Real(5, "chair", {5, 0, 0.45}, {0.5, 0.5, 0.9}),
+  };
+  const std::vector<MappedObject> mapped = {
+      Mapped(11, "cup", {-0.04, -0.04, -0.05}, {0.04, 0.04, 0.05}),  // cup 1
+      Mapped(12, "cup", {-0.03, -0.05, -0.04}, {0.05, 0.03, 0.04}),  // cup 1 again
+      Mapped(13, "tv", {1.5, -0.05, 0.7}, {3.55, 0.05, 1.3}),        // both monitors
+      Mapped(14, "couch", {4.75, -0.25, 0.0}, {5.25, 0.25, 0.9}),    // the chair, mislabelled
+      Mapped(15, "cup", {9.9, 9.9, 9.9}, {10.1, 10.1, 10.1}),        // nothing there
+  };
+  const ObjectEvaluation evaluation = EvaluateObjects(real, mapped, EvaluationConfig{});
+
+  const ClassCounts& cups = Counts(evaluation, "cup");
+  EXPECT_EQ(cups.real, 2);
+  EXPECT_EQ(cups.mapped, 3);
+  EXPECT_EQ(cups.true_positives, 1);
+  EXPECT_EQ(cups.duplicates, 1);
+  EXPECT_EQ(cups.misses, 1);          // the second cup
+  EXPECT_EQ(cups.false_positives, 1);  // the cup at (10, 10, 10)
+
+  const ClassCounts& tvs = Counts(evaluation, "tv");
+  EXPECT_EQ(tvs.true_positives, 1);
+  EXPECT_EQ(tvs.merges, 1);
+  EXPECT_EQ(tvs.misses, 1);
+  EXPECT_EQ(tvs.false_positives, 0);
+
+  EXPECT_EQ(Counts(evaluation, "chair").misses, 1);
+  const ClassCounts& couches = Counts(evaluation, "couch");
+  EXPECT_EQ(couches.false_positives, 1);
+  EXPECT_EQ(couches.wrong_labels, 1);
+
+  const ClassCounts& all = evaluation.totals;
+  EXPECT_EQ(all.real, 5);
+  EXPECT_EQ(all.mapped, 5);
+  EXPECT_EQ(all.true_positives, 2);
+  EXPECT_EQ(all.false_positives, 2);
+  EXPECT_EQ(all.misses, 3);
+  EXPECT_EQ(all.duplicates, 1);
+  EXPECT_DOUBLE_EQ(all.Precision(), 2.0 / 5.0);
+  EXPECT_DOUBLE_EQ(all.Recall(), 2.0 / 5.0);
+  ASSERT_EQ(evaluation.matches.size(), 2u);
+}
+
+TEST(EvaluateObjects, APartlySeenObjectStillMatchesAndARotatedBoxIsHonoured) {
+  // A table seen only at one end: its model's centroid is off centre but inside the real box.
+  GroundTruthObject table = Real(1, "dining table", {0, 0, 0.7}, {2.0, 0.9, 0.05});
+  // The same box turned by 90 degrees about z: 0.9 m along x, 2 m along y.
+  table.T_W_B.linear() = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const MappedObject seen_end = Mapped(7, "dining table", {-0.4, 0.5, 0.68}, {0.4, 0.95, 0.72});
+  ObjectEvaluation evaluation = EvaluateObjects({table}, {seen_end}, EvaluationConfig{});
+  EXPECT_EQ(evaluation.totals.true_positives, 1);
+  // Had the box not been turned, y = 0.725 would lie outside its 0.9 m width.
+  table.T_W_B.linear().setIdentity();
+  evaluation = EvaluateObjects({table}, {seen_end}, EvaluationConfig{});
+  EXPECT_EQ(evaluation.totals.true_positives, 0);
+  EXPECT_EQ(evaluation.totals.false_positives, 1);
+}
+
+TEST(EvaluateObjects, ModelAccuracyIsTheMeanDistanceToTheSurface) {
+  GroundTruthObject book = Real(1, "book", {0, 0, 0}, {0.2, 0.2, 0.02});
+  MappedObject mapped = Mapped(3, "book", {-0.1, -0.1, -0.01}, {0.1, 0.1, 0.01});
+  for (int i = -10; i <= 10; ++i) {
+    for (int j = -10; j <= 10; ++j) {
+      book.surface_W.emplace_back(0.01f * i, 0.01f * j, 0.0f);
+      mapped.model_W.emplace_back(0.01f * i, 0.01f * j, 0.003f);  // 3 mm above the surface
+    }
+  }
+  const ObjectEvaluation evaluation = EvaluateObjects({book}, {mapped}, EvaluationConfig{});
+  ASSERT_EQ(evaluation.matches.size(), 1u);
+  EXPECT_NEAR(evaluation.matches[0].model_to_surface_m, 0.003, 1e-6);
+  EXPECT_NEAR(evaluation.matches[0].surface_to_model_m, 0.003, 1e-6);
+  EXPECT_NEAR(evaluation.mean_model_to_surface_m, 0.003, 1e-6);
+  // A stray point 1 m away counts as the cap (10 cm), not as 1 m.
+  MappedObject stray = mapped;
+  stray.model_W.emplace_back(1.0f, 0.0f, 0.0f);
+  const double n = static_cast<double>(stray.model_W.size());
+  const ObjectEvaluation with_stray = EvaluateObjects({book}, {stray}, EvaluationConfig{});
+  EXPECT_NEAR(with_stray.matches[0].model_to_surface_m, (0.003 * (n - 1) + 0.1) / n, 1e-6);
+}
+
+TEST(ScoreCounts, CountsInsideTheRangeAreRightAndTheRestMissesOrFalsePositives) {
+  const std::map<int, CountRange> expected = {{CocoClassId("chair"), {4, 6}},
+                                              {CocoClassId("tv"), {2, 2}},
+                                              {CocoClassId("sink"), {1, 1}}};
+  const std::map<int, int> found = {{CocoClassId("chair"), 3},
+                                    {CocoClassId("tv"), 2},
+                                    {CocoClassId("sink"), 2},
+                                    {CocoClassId("cup"), 1}};
+  const std::map<int, ClassCounts> scores = ScoreCounts(expected, found);
+  const ClassCounts& chairs = scores.at(CocoClassId("chair"));
+  EXPECT_EQ(chairs.true_positives, 3);
+  EXPECT_EQ(chairs.misses, 1);
+  EXPECT_EQ(chairs.real, 4);
+  EXPECT_EQ(scores.at(CocoClassId("tv")).true_positives, 2);
+  EXPECT_EQ(scores.at(CocoClassId("sink")).true_positives, 1);
+  EXPECT_EQ(scores.at(CocoClassId("sink")).false_positives, 1);
+  EXPECT_EQ(scores.at(CocoClassId("cup")).false_positives, 1);
+  EXPECT_EQ(scores.at(CocoClassId("cup")).real, 0);
+}
+
+class EvaluationFiles : public ::testing::Test {
+ protected:
+  EvaluationFiles()
+      : dir_(fs::temp_directory_path() / ("objmap_evaluation_" + std::to_string(getpid()) + "_" +
+                                          ::testing::UnitTest::GetInstance()
+                                              ->current_test_info()
+                                              ->name())) {
+    fs::remove_all(dir_);
+    fs::create_directories(dir_ / "objects");
+  }
+  ~EvaluationFiles() override { fs::remove_all(dir_); }
+  std::string Write(const std::string& name, const std::string& text) const {
+    std::ofstream(dir_ / name) << text;
+    return (dir_ / name).string();
+  }
+  fs::path dir_;
+};
+
+TEST_F(EvaluationFiles, GroundTruthIsReadAndBadEntriesAreNamed) {
+  const std::string path = Write(
+      "gt.json", R"({"objects": [{"id": 4, "class": "cup",
+        "pose": [1,0,0,0.5, 0,1,0,0, 0,0,1,0.7, 0,0,0,1], "size": [0.08, 0.08, 0.1],
+        "surface_sample": [[0.5, 0, 0.75], [0.46, 0, 0.7]]}]})");
+  std::vector<GroundTruthObject> objects;
+  std::string why;
+  ASSERT_TRUE(ReadGroundTruth(path, &objects, &why)) << why;
+  ASSERT_EQ(objects.size(), 1u);
+  EXPECT_EQ(objects[0].id, 4);
+  EXPECT_EQ(objects[0].class_id, CocoClassId("cup"));
+  EXPECT_DOUBLE_EQ(objects[0].T_W_B.translation().z(), 0.7);
+  EXPECT_EQ(objects[0].surface_W.size(), 2u);
+
+  const std::string mug = Write(
+      "mug.json", R"({"objects": [{"id": 1, "class": "mug",
+        "pose": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1], "size": [1, 1, 1]}]})");
+  EXPECT_FALSE(ReadGroundTruth(mug, &objects, &why));
+  EXPECT_NE(why.find("objects[0]: class 'mug' is not a COCO class"), std::string::npos) << why;
+  const std::string sheared = Write(
+      "sheared.json", R"({"objects": [{"id": 1, "class": "cup",
+        "pose": [2,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1], "size": [1, 1, 1]}]})");
+  EXPECT_FALSE(ReadGroundTruth(sheared, &objects, &why));
+  EXPECT_NE(why.find("objects[0]: pose: "), std::string::npos) << why;
+  const std::string no_size = Write(
+      "no_size.json", R"({"objects": [{"id": 1, "class": "cup",
+        "pose": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]}]})");
+  EXPECT_FALSE(ReadGroundTruth(no_size, &objects, &why));
+  EXPECT_NE(why.find("\"size\""), std::string::npos) << why;
+  EXPECT_FALSE(ReadGroundTruth(Write("broken.json", "{\"objects\": ["), &objects, &why));
+  EXPECT_NE(why.find("not valid JSON"), std::string::npos) << why;
+}
+
+TEST_F(EvaluationFiles, ExpectedCountsTakeNumbersAndRanges) {
+  std::map<int, CountRange> counts;
+  std::string why;
+  ASSERT_TRUE(ReadExpectedCounts(Write("c.json", R"({"chair": [4, 6], "tv": 2})"), &counts, &why))
+      << why;
+  EXPECT_EQ(counts.at(CocoClassId("chair")).min, 4);
+  EXPECT_EQ(counts.at(CocoClassId("chair")).max, 6);
+  EXPECT_EQ(counts.at(CocoClassId("tv")).max, 2);
+  EXPECT_FALSE(ReadExpectedCounts(Write("d.json", R"({"chair": [6, 4]})"), &counts, &why));
+  EXPECT_NE(why.find("chair: expected a count >= 0 or a range [min, max]"), std::string::npos)
+      << why;
+  EXPECT_FALSE(ReadExpectedCounts(Write("e.json", R"({"monitor": 1})"), &counts, &why));
+  EXPECT_NE(why.find("'monitor' is not a COCO class"), std::string::npos) << why;
+}
+
+TEST_F(EvaluationFiles, MapDirectoriesOfBothWritersGiveTheirInventoryObjectsWithModels) {
+  std::string why;
+  ASSERT_TRUE(WritePly((dir_ / "objects" / "1_cup.ply").string(),
+                       {{0.f, 0.f, 0.f}, {0.01f, 0.f, 0.f}}, {{1, 2, 3}, {4, 5, 6}}, &why))
+      << why;
+  // `objmap map --out`: "in_inventory", bbox_min / bbox_max, models in objects/.
+  Write("objects.json", R"({"objects": [
+    {"id": 1, "class": "cup", "in_inventory": true, "centroid": [0.005, 0, 0],
+     "bbox_min": [0, 0, 0], "bbox_max": [0.01, 0, 0]},
+    {"id": 2, "class": "chair", "in_inventory": false, "centroid": [1, 1, 1],
+     "bbox_min": [1, 1, 1], "bbox_max": [1, 1, 1]}]})");
+  std::vector<MappedObject> objects;
+  ASSERT_TRUE(ReadMapDirectory(dir_.string(), &objects, &why)) << why;
+  ASSERT_EQ(objects.size(), 1u);  // the chair is not in the inventory
+  EXPECT_EQ(objects[0].class_id, CocoClassId("cup"));
+  EXPECT_EQ(objects[0].model_W.size(), 2u);
+  EXPECT_FLOAT_EQ(objects[0].model_W[1].x(), 0.01f);
+
+  // `objmap export --objects`: "confirmed", "bounds", the PLY named by "ply".
+  Write("objects.json", R"({"map_version": 3, "objects": [
+    {"id": 1, "class": "cup", "confirmed": true, "centroid": [0.005, 0, 0],
+     "bounds": {"min": [0, 0, 0], "max": [0.01, 0, 0]}, "ply": "objects/1_cup.ply"}]})");
+  ASSERT_TRUE(ReadMapDirectory(dir_.string(), &objects, &why)) << why;
+  ASSERT_EQ(objects.size(), 1u);
+  EXPECT_EQ(objects[0].model_W.size(), 2u);
+
+  Write("objects.json", R"({"objects": [{"id": 1, "class": "cup", "in_inventory": true}]})");
+  EXPECT_FALSE(ReadMapDirectory(dir_.string(), &objects, &why));
+  EXPECT_NE(why.find("objects[0]: centroid and bounds"), std::string::npos) << why;
+  std::ofstream(dir_ / "objects" / "1_cup.ply") << "ply\nformat ascii 1.0\nend_header\n";
+  Write("objects.json", R"({"objects": [
+    {"id": 1, "class": "cup", "in_inventory": true, "centroid": [0, 0, 0],
+     "bbox_min": [0, 0, 0], "bbox_max": [0, 0, 0]}]})");
+  EXPECT_FALSE(ReadMapDirectory(dir_.string(), &objects, &why));
+  EXPECT_NE(why.find("1_cup.ply: not a binary little-endian PLY"), std::string::npos) << why;
+}
+
+}  // namespace
+}  // namespace objmap
