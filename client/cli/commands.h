@@ -9,6 +9,9 @@ int RunMapCommand(int argc, char** argv);
 /// `objmap segment <organized.pcd> --out <labelled.pcd>`: segments one cloud locally.
 int RunSegmentCommand(int argc, char** argv);
 
+/// `objmap eval <map-dir | ADDR> --gt ground_truth.json | --inventory counts.json`: scores a map.
+int RunEvalCommand(int argc, char** argv);
+
 // Commands that talk to a running objmap_server (built with OBJMAP_WITH_GRPC).
 
 /// `objmap ingest <dataset>`: streams the keyframes of a recorded sequence to the server.

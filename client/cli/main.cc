@@ -15,6 +15,8 @@ void PrintUsage() {
       << "usage:\n"
          "  objmap map <dataset> --out <dir> [options]   map an RGB-D sequence\n"
          "  objmap segment <organized.pcd> --out <labelled.pcd>   segment one cloud\n"
+         "  objmap eval <map-dir> --gt ground_truth.json | --inventory counts.json\n"
+         "                                               score a map against ground truth\n"
 #ifdef OBJMAP_CLI_WITH_SERVER
          "commands for a running objmap_server (--server ADDR, default 127.0.0.1:50051):\n"
          "  objmap ingest <dataset>                      stream a sequence's keyframes\n"
@@ -33,6 +35,7 @@ const std::map<std::string, Command>& Commands() {
   static const std::map<std::string, Command> commands = {
       {"map", objmap::cli::RunMapCommand},
       {"segment", objmap::cli::RunSegmentCommand},
+      {"eval", objmap::cli::RunEvalCommand},
 #ifdef OBJMAP_CLI_WITH_SERVER
       {"ingest", objmap::cli::RunIngestCommand},
       {"inventory", objmap::cli::RunInventoryCommand},

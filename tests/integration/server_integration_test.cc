@@ -630,6 +630,18 @@ TEST_F(ServerIntegration, CliInventoryFreeAndExportAgreeWithTheApi) {
   for (const auto& [name, ids] : shared().inventory_after.back()) confirmed += ids.size();
   EXPECT_EQ(plys, confirmed);
   EXPECT_TRUE(fs::exists(out / "objects" / "objects.json"));
+
+  // eval, on the server and on the exported folder: the same objects, the same scores.
+  const std::string counts = std::string(OBJMAP_SOURCE_DIR) + "/tests/eval/redkitchen_inventory.json";
+  const testing::CommandResult on_server =
+      testing::RunObjmap("eval " + shared().server->address() + " --inventory " + counts + " --json");
+  ASSERT_EQ(on_server.exit_code, 0) << on_server.output;
+  const testing::CommandResult on_folder =
+      testing::RunObjmap("eval " + (out / "objects").string() + " --inventory " + counts + " --json");
+  ASSERT_EQ(on_folder.exit_code, 0) << on_folder.output;
+  EXPECT_EQ(on_server.output, on_folder.output);
+  EXPECT_NE(on_server.output.find("\"mapped\": " + std::to_string(confirmed)), std::string::npos)
+      << on_server.output;
 }
 
 TEST_F(ServerIntegration, CliExportsKeyframePosesThatUpdatePosesTakesBackUnmoved) {
