@@ -1,0 +1,352 @@
+#include "sim/scene.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "sim/sim_random.h"
+#include "types/coco_classes.h"
+
+namespace objmap::sim {
+namespace {
+
+constexpr float kPi = 3.14159265f;
+
+Eigen::Isometry3f Pose(const Eigen::Vector3f& t, float yaw = 0.f) {
+  Eigen::Isometry3f T = Eigen::Isometry3f::Identity();
+  T.translate(t);
+  T.rotate(Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ()));
+  return T;
+}
+
+Rgb Jitter(const Rgb& color, Random* random) {
+  Rgb out;
+  for (int c = 0; c < 3; ++c) {
+    out[c] = static_cast<std::uint8_t>(std::clamp(color[c] + random->Uniform(-20.0, 20.0), 0.0, 255.0));
+  }
+  return out;
+}
+
+// Objects stand on z = 0 of their frame, centred on x = y = 0 unless said otherwise.
+
+TriangleMesh Table(float length, float width, float height, const Rgb& wood) {
+  TriangleMesh mesh;
+  const float top = 0.03f, leg = 0.05f;
+  mesh.AddBox({-length / 2, -width / 2, height - top}, {length / 2, width / 2, height}, wood);
+  for (float sx : {-1.f, 1.f}) {
+    for (float sy : {-1.f, 1.f}) {
+      const Eigen::Vector3f c(sx * (length / 2 - leg), sy * (width / 2 - leg), 0.f);
+      mesh.AddBox(c - Eigen::Vector3f(leg / 2, leg / 2, 0.f),
+                  c + Eigen::Vector3f(leg / 2, leg / 2, height - top), wood);
+    }
+  }
+  return mesh;
+}
+
+// Seat 0.45 m high; the back is on the +y side.
+TriangleMesh Chair(const Rgb& color) {
+  TriangleMesh mesh;
+  const float seat = 0.45f, half = 0.22f, leg = 0.035f;
+  mesh.AddBox({-half, -half, seat - 0.04f}, {half, half, seat}, color);
+  mesh.AddBox({-half, half - 0.04f, seat}, {half, half, seat + 0.45f}, color);
+  for (float sx : {-1.f, 1.f}) {
+    for (float sy : {-1.f, 1.f}) {
+      const Eigen::Vector3f c(sx * (half - leg), sy * (half - leg), 0.f);
+      mesh.AddBox(c - Eigen::Vector3f(leg / 2, leg / 2, 0.f),
+                  c + Eigen::Vector3f(leg / 2, leg / 2, seat - 0.04f), color);
+    }
+  }
+  return mesh;
+}
+
+// A flat screen on a stand; the screen faces -y.
+TriangleMesh Monitor(float width, float height, const Rgb& frame, const Rgb& screen) {
+  TriangleMesh mesh;
+  mesh.AddBox({-0.12f, -0.1f, 0.f}, {0.12f, 0.1f, 0.015f}, frame);   // foot
+  mesh.AddBox({-0.025f, 0.02f, 0.015f}, {0.025f, 0.05f, 0.12f}, frame);  // neck
+  mesh.AddBox({-width / 2, -0.01f, 0.1f}, {width / 2, 0.03f, 0.1f + height}, frame);
+  mesh.AddBox({-width / 2 + 0.015f, -0.012f, 0.115f}, {width / 2 - 0.015f, -0.01f, 0.085f + height},
+              screen);
+  return mesh;
+}
+
+// A computer keyboard: a flat slab with a relief of keys (the paper's flat-keyboard case).
+TriangleMesh Keyboard(const Rgb& body, const Rgb& keys) {
+  TriangleMesh mesh;
+  const float length = 0.44f, depth = 0.14f;
+  mesh.AddBox({-length / 2, -depth / 2, 0.f}, {length / 2, depth / 2, 0.015f}, body);
+  const int columns = 15, rows = 5;
+  const float pitch_x = (length - 0.03f) / columns, pitch_y = (depth - 0.02f) / rows;
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < columns; ++c) {
+      const Eigen::Vector3f corner(-length / 2 + 0.015f + c * pitch_x,
+                                   -depth / 2 + 0.01f + r * pitch_y, 0.015f);
+      mesh.AddBox(corner + Eigen::Vector3f(0.002f, 0.002f, 0.f),
+                  corner + Eigen::Vector3f(pitch_x - 0.002f, pitch_y - 0.002f, 0.008f), keys);
+    }
+  }
+  return mesh;
+}
+
+TriangleMesh Mouse(const Rgb& color) {
+  TriangleMesh mesh;
+  mesh.AddBox({-0.03f, -0.055f, 0.f}, {0.03f, 0.055f, 0.035f}, color);
+  return mesh;
+}
+
+TriangleMesh Cup(const Rgb& color) {
+  TriangleMesh mesh;
+  mesh.AddCylinder({0.f, 0.f, 0.f}, 0.04f, 0.1f, 16, color);
+  mesh.AddBox({0.04f, -0.006f, 0.025f}, {0.065f, 0.006f, 0.075f}, color);  // handle
+  return mesh;
+}
+
+TriangleMesh Book(float length, float width, float thickness, const Rgb& color) {
+  TriangleMesh mesh;
+  mesh.AddBox({-length / 2, -width / 2, 0.f}, {length / 2, width / 2, thickness}, color);
+  return mesh;
+}
+
+TriangleMesh Laptop(const Rgb& color, const Rgb& screen) {
+  TriangleMesh mesh;
+  mesh.AddBox({-0.17f, -0.12f, 0.f}, {0.17f, 0.12f, 0.02f}, color);
+  // The lid, opened to about 105 degrees, hinged at the back edge.
+  TriangleMesh lid;
+  lid.AddBox({-0.17f, 0.f, 0.f}, {0.17f, 0.23f, 0.012f}, color);
+  lid.AddBox({-0.16f, 0.01f, -0.001f}, {0.16f, 0.22f, 0.f}, screen);
+  Eigen::Isometry3f hinge = Eigen::Isometry3f::Identity();
+  hinge.translate(Eigen::Vector3f(0.f, 0.12f, 0.02f));
+  hinge.rotate(Eigen::AngleAxisf(1.83f, Eigen::Vector3f::UnitX()));
+  mesh.Append(lid, hinge);
+  return mesh;
+}
+
+class SceneBuilder {
+ public:
+  SceneBuilder(Scene* scene, Random* random) : scene_(scene), random_(random) {}
+  void Add(const char* class_name, const std::string& name, const TriangleMesh& mesh,
+           const Eigen::Vector3f& position, float yaw) {
+    SceneObject object;
+    object.id = static_cast<int>(scene_->objects.size()) + 1;
+    object.class_id = CocoClassId(class_name);
+    object.name = name;
+    object.mesh = mesh;
+    object.T_W_O = Pose(position, yaw).cast<double>();
+    scene_->objects.push_back(std::move(object));
+  }
+  Random& random() { return *random_; }
+  Scene& scene() { return *scene_; }
+
+ private:
+  Scene* scene_;
+  Random* random_;
+};
+
+// Floor, walls and a ceiling of a w x d x h room with its corner at the origin.
+void AddRoom(float w, float d, float h, Random* random, TriangleMesh* structure) {
+  const Rgb floor = Jitter({120, 110, 100}, random), wall = Jitter({215, 210, 200}, random);
+  structure->AddBox({0.f, 0.f, -0.05f}, {w, d, 0.f}, floor);
+  structure->AddBox({0.f, 0.f, h}, {w, d, h + 0.05f}, wall);
+  structure->AddBox({-0.05f, 0.f, 0.f}, {0.f, d, h}, wall);
+  structure->AddBox({w, 0.f, 0.f}, {w + 0.05f, d, h}, wall);
+  structure->AddBox({0.f, -0.05f, 0.f}, {w, 0.f, h}, wall);
+  structure->AddBox({0.f, d, 0.f}, {w, d + 0.05f, h}, wall);
+}
+
+// The desk with everything on it, its front edge facing -y, centred at `centre` (floor level).
+void AddDesk(SceneBuilder* b, const Eigen::Vector3f& centre, bool two_monitors) {
+  Random& r = b->random();
+  const float height = 0.74f, length = 1.6f, width = 0.8f;
+  b->Add("dining table", "desk", Table(length, width, height, Jitter({170, 130, 90}, &r)), centre,
+         0.f);
+  const Eigen::Vector3f top = centre + Eigen::Vector3f(0.f, 0.f, height);
+  const Rgb black = Jitter({40, 40, 45}, &r), screen = Jitter({30, 60, 120}, &r);
+  if (two_monitors) {
+    // Side by side, a centimetre apart: the paper's "two monitors merged into one".
+    const float w = static_cast<float>(r.Uniform(0.5, 0.56));
+    b->Add("tv", "left monitor", Monitor(w, 0.32f, black, screen),
+           top + Eigen::Vector3f(-w / 2 - 0.005f, 0.2f, 0.f), 0.f);
+    b->Add("tv", "right monitor", Monitor(w, 0.32f, black, screen),
+           top + Eigen::Vector3f(w / 2 + 0.005f, 0.2f, 0.f), 0.f);
+  } else {
+    b->Add("laptop", "laptop", Laptop(Jitter({150, 150, 155}, &r), screen),
+           top + Eigen::Vector3f(0.f, 0.12f, 0.f), static_cast<float>(r.Uniform(-0.2, 0.2)));
+  }
+  b->Add("keyboard", "keyboard", Keyboard(black, Jitter({70, 70, 75}, &r)),
+         top + Eigen::Vector3f(static_cast<float>(r.Uniform(-0.1, 0.05)), -0.16f, 0.f),
+         static_cast<float>(r.Uniform(-0.08, 0.08)));
+  b->Add("mouse", "mouse", Mouse(black), top + Eigen::Vector3f(0.33f, -0.17f, 0.f), 0.f);
+  // Two cups close together (3 cm apart) at the left end.
+  const Eigen::Vector3f cups = top + Eigen::Vector3f(-0.62f, -0.15f, 0.f);
+  b->Add("cup", "left cup", Cup(Jitter({230, 230, 225}, &r)), cups, 0.4f);
+  b->Add("cup", "right cup", Cup(Jitter({180, 40, 40}, &r)), cups + Eigen::Vector3f(0.11f, 0.f, 0.f),
+         2.6f);
+  // Three books stacked at the right end.
+  float z = 0.f;
+  for (int i = 0; i < 3; ++i) {
+    const float thickness = static_cast<float>(r.Uniform(0.02, 0.04));
+    b->Add("book", "book " + std::to_string(i + 1),
+           Book(0.24f - 0.02f * i, 0.17f, thickness,
+                Jitter({static_cast<std::uint8_t>(60 + 60 * i), 90,
+                        static_cast<std::uint8_t>(160 - 40 * i)},
+                       &r)),
+           top + Eigen::Vector3f(0.6f, 0.05f, z), static_cast<float>(r.Uniform(-0.15, 0.15)));
+    z += thickness;
+  }
+  // A chair pushed under the desk: its seat is under the top, its back in front of the edge.
+  b->Add("chair", "desk chair", Chair(Jitter({60, 60, 70}, &r)),
+         centre + Eigen::Vector3f(static_cast<float>(r.Uniform(-0.2, 0.2)), -0.25f, 0.f), kPi);
+}
+
+// A camera sweeping an arc in front of `target`, looking at it from about 1.5 m high.
+std::vector<Eigen::Isometry3d> Sweep(const Eigen::Vector3d& target, double radius, int frames,
+                                     Random* random) {
+  std::vector<Eigen::Isometry3d> poses;
+  const double start = random->Uniform(-1.1, -0.9), end = random->Uniform(0.9, 1.1);
+  for (int i = 0; i < frames; ++i) {
+    const double s = frames > 1 ? static_cast<double>(i) / (frames - 1) : 0.5;
+    const double angle = start + (end - start) * s;  // around +z, 0: straight in front (-y)
+    const Eigen::Vector3d eye =
+        target + Eigen::Vector3d(radius * std::sin(angle), -radius * std::cos(angle),
+                                 0.65 + 0.15 * std::sin(3.0 * s * M_PI));
+    // Camera axes: z forward (to the target), x right, y down.
+    const Eigen::Vector3d forward = (target - eye).normalized();
+    const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized();
+    const Eigen::Vector3d down = forward.cross(right);
+    Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
+    T_W_C.linear().col(0) = right;
+    T_W_C.linear().col(1) = down;
+    T_W_C.linear().col(2) = forward;
+    T_W_C.translation() = eye;
+    poses.push_back(T_W_C);
+  }
+  return poses;
+}
+
+}  // namespace
+
+void TriangleMesh::AddBox(const Eigen::Vector3f& min, const Eigen::Vector3f& max, const Rgb& color,
+                          const Eigen::Isometry3f& T) {
+  const int base = static_cast<int>(vertices.size());
+  for (int i = 0; i < 8; ++i) {
+    vertices.push_back(T * Eigen::Vector3f((i & 1) ? max.x() : min.x(), (i & 2) ? max.y() : min.y(),
+                                           (i & 4) ? max.z() : min.z()));
+  }
+  // Faces wound counter-clockwise seen from outside.
+  static const int kFaces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                   {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& f : kFaces) {
+    triangles.emplace_back(base + f[0], base + f[1], base + f[2]);
+    triangles.emplace_back(base + f[0], base + f[2], base + f[3]);
+    colors.push_back(color);
+    colors.push_back(color);
+  }
+}
+
+void TriangleMesh::AddCylinder(const Eigen::Vector3f& base_centre, float radius, float height,
+                               int sides, const Rgb& color) {
+  const int base = static_cast<int>(vertices.size());
+  for (int i = 0; i < sides; ++i) {
+    const float a = 2.f * kPi * i / sides;
+    const Eigen::Vector3f offset(radius * std::cos(a), radius * std::sin(a), 0.f);
+    vertices.push_back(base_centre + offset);
+    vertices.push_back(base_centre + offset + Eigen::Vector3f(0.f, 0.f, height));
+  }
+  vertices.push_back(base_centre);
+  vertices.push_back(base_centre + Eigen::Vector3f(0.f, 0.f, height));
+  const int bottom = base + 2 * sides, top = bottom + 1;
+  for (int i = 0; i < sides; ++i) {
+    const int j = (i + 1) % sides;
+    const int b0 = base + 2 * i, t0 = b0 + 1, b1 = base + 2 * j, t1 = b1 + 1;
+    triangles.emplace_back(b0, b1, t1);
+    triangles.emplace_back(b0, t1, t0);
+    triangles.emplace_back(bottom, b1, b0);
+    triangles.emplace_back(top, t0, t1);
+    for (int k = 0; k < 4; ++k) colors.push_back(color);
+  }
+}
+
+void TriangleMesh::Append(const TriangleMesh& other, const Eigen::Isometry3f& T) {
+  const int base = static_cast<int>(vertices.size());
+  for (const Eigen::Vector3f& v : other.vertices) vertices.push_back(T * v);
+  for (const Eigen::Vector3i& t : other.triangles) {
+    triangles.push_back(t + Eigen::Vector3i::Constant(base));
+  }
+  colors.insert(colors.end(), other.colors.begin(), other.colors.end());
+}
+
+std::vector<Eigen::Vector3f> TriangleMesh::SampleSurface(std::size_t count,
+                                                         std::uint64_t seed) const {
+  std::vector<double> cumulative;
+  double total = 0.0;
+  for (const Eigen::Vector3i& t : triangles) {
+    total += 0.5 * (vertices[t[1]] - vertices[t[0]]).cross(vertices[t[2]] - vertices[t[0]]).norm();
+    cumulative.push_back(total);
+  }
+  std::vector<Eigen::Vector3f> samples;
+  if (triangles.empty() || total <= 0.0) return samples;
+  Random random(seed, 0x5A3F1E);
+  for (std::size_t i = 0; i < count; ++i) {
+    const double pick = random.Uniform() * total;
+    const std::size_t k = static_cast<std::size_t>(
+        std::lower_bound(cumulative.begin(), cumulative.end(), pick) - cumulative.begin());
+    const Eigen::Vector3i& t = triangles[std::min(k, triangles.size() - 1)];
+    double u = random.Uniform(), v = random.Uniform();
+    if (u + v > 1.0) u = 1.0 - u, v = 1.0 - v;
+    samples.push_back(vertices[t[0]] + static_cast<float>(u) * (vertices[t[1]] - vertices[t[0]]) +
+                      static_cast<float>(v) * (vertices[t[2]] - vertices[t[0]]));
+  }
+  return samples;
+}
+
+void TriangleMesh::Bounds(Eigen::Vector3f* min, Eigen::Vector3f* max) const {
+  *min = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
+  *max = Eigen::Vector3f::Constant(std::numeric_limits<float>::lowest());
+  for (const Eigen::Vector3f& v : vertices) {
+    *min = min->cwiseMin(v);
+    *max = max->cwiseMax(v);
+  }
+}
+
+std::vector<std::string> SceneKinds() { return {"desk", "office"}; }
+
+bool MakeScene(const std::string& kind, std::uint64_t seed, int frames, Scene* scene,
+               std::string* why) {
+  const std::vector<std::string> kinds = SceneKinds();
+  if (std::find(kinds.begin(), kinds.end(), kind) == kinds.end()) {
+    *why = "unknown scene kind '" + kind + "' (desk, office)";
+    return false;
+  }
+  if (frames < 1) {
+    *why = "a scene needs at least one frame";
+    return false;
+  }
+  *scene = Scene{};
+  scene->kind = kind;
+  scene->seed = seed;
+  scene->intrinsics = CameraIntrinsics{};  // 640x480, fx = fy = 585 (Kinect-like)
+  scene->intrinsics.width = 640;
+  scene->intrinsics.height = 480;
+  scene->intrinsics.fx = scene->intrinsics.fy = 585.0;
+  scene->intrinsics.cx = 320.0;
+  scene->intrinsics.cy = 240.0;
+  Random random(seed, std::hash<std::string>{}(kind) & 0xFFFF);
+  SceneBuilder builder(scene, &random);
+  const float w = 5.f, d = 4.5f, h = 2.7f;
+  AddRoom(w, d, h, &random, &scene->structure);
+  const Eigen::Vector3f desk(2.5f + static_cast<float>(random.Uniform(-0.2, 0.2)), 3.4f, 0.f);
+  AddDesk(&builder, desk, /*two_monitors=*/kind == "office");
+  if (kind == "office") {
+    // A second chair standing free, a plant in the corner, a bookshelf's worth of structure.
+    builder.Add("chair", "visitor chair", Chair(Jitter({120, 40, 40}, &random)),
+                Eigen::Vector3f(1.2f, 2.6f, 0.f), static_cast<float>(random.Uniform(0.3, 0.9)));
+    TriangleMesh plant;
+    plant.AddCylinder({0.f, 0.f, 0.f}, 0.12f, 0.3f, 12, {150, 80, 50});
+    plant.AddCylinder({0.f, 0.f, 0.3f}, 0.22f, 0.5f, 10, {40, 130, 50});
+    builder.Add("potted plant", "plant", plant, Eigen::Vector3f(4.4f, 4.0f, 0.f), 0.f);
+    scene->structure.AddBox({0.05f, 3.7f, 0.f}, {1.0f, 4.45f, 1.8f}, Jitter({140, 110, 80}, &random));
+  }
+  scene->trajectory = Sweep(Eigen::Vector3d(desk.x(), desk.y(), 0.8), 1.7, frames, &random);
+  return true;
+}
+
+}  // namespace objmap::sim

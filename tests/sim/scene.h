@@ -1,0 +1,69 @@
+#pragma once
+// Synthetic indoor scenes for ground truth: triangle meshes of COCO objects placed in a room,
+// with a camera trajectory. Procedural objects (boxes, prisms) stand in where no mesh is given;
+// every scene is a pure function of its kind and seed.
+
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "types/frame.h"
+
+namespace objmap::sim {
+
+using Rgb = std::array<std::uint8_t, 3>;
+
+/// Triangles with one colour each.
+struct TriangleMesh {
+  std::vector<Eigen::Vector3f> vertices;
+  std::vector<Eigen::Vector3i> triangles;
+  std::vector<Rgb> colors;  ///< one per triangle
+
+  /// An axis-aligned box [min, max] (in the mesh frame, then moved by `T`), outward faces.
+  void AddBox(const Eigen::Vector3f& min, const Eigen::Vector3f& max, const Rgb& color,
+              const Eigen::Isometry3f& T = Eigen::Isometry3f::Identity());
+  /// A vertical prism of `sides` sides around the z axis (a cylinder for large `sides`): radius,
+  /// from z0 to z1, with top and bottom caps.
+  void AddCylinder(const Eigen::Vector3f& base_centre, float radius, float height, int sides,
+                   const Rgb& color);
+  /// Appends `other` moved by `T`.
+  void Append(const TriangleMesh& other,
+              const Eigen::Isometry3f& T = Eigen::Isometry3f::Identity());
+  /// Points sampled uniformly on the surface (area-weighted), deterministic for `seed`.
+  [[nodiscard]] std::vector<Eigen::Vector3f> SampleSurface(std::size_t count,
+                                                           std::uint64_t seed) const;
+  /// Axis-aligned bounds of the vertices.
+  void Bounds(Eigen::Vector3f* min, Eigen::Vector3f* max) const;
+};
+
+/// One real object: its mesh in its own frame and where it stands.
+struct SceneObject {
+  int id = 0;  ///< instance id (1..), as in the rendered instance images
+  int class_id = -1;
+  std::string name;  ///< what it is ("left monitor"), for people reading ground_truth.json
+  TriangleMesh mesh;  ///< object frame
+  Eigen::Isometry3d T_W_O = Eigen::Isometry3d::Identity();
+};
+
+struct Scene {
+  std::string kind;
+  std::uint64_t seed = 0;
+  TriangleMesh structure;  ///< room and everything that is no COCO object (world frame)
+  std::vector<SceneObject> objects;
+  CameraIntrinsics intrinsics;
+  std::vector<Eigen::Isometry3d> trajectory;  ///< T_W_C per frame
+};
+
+/// The scene kinds there are: "desk", "office".
+[[nodiscard]] std::vector<std::string> SceneKinds();
+
+/// A scene of `kind` with `frames` camera poses; positions, sizes and colours vary with `seed`.
+/// The paper's hard cases are in it: monitors side by side, a flat keyboard on the desk, stacked
+/// books, cups close together, a chair pushed under the desk. False with a reason for an
+/// unknown kind.
+[[nodiscard]] bool MakeScene(const std::string& kind, std::uint64_t seed, int frames, Scene* scene,
+                             std::string* why);
+
+}  // namespace objmap::sim

@@ -1,0 +1,62 @@
+#pragma once
+// A synthetic scene written as a recorded sequence in the 7-Scenes layout the readers take
+// (frame-NNNNNN.color.png, .depth.png in mm, .pose.txt, camera-intrinsics.txt) plus
+// frame-NNNNNN.instance.png (16-bit instance ids), detections.json (the ground-truth detector's
+// output, in the format of `objmap map --detections`) and ground_truth.json (the format of
+// `objmap eval --gt`).
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "sim/renderer.h"
+#include "sim/scene.h"
+#include "types/detection.h"
+
+namespace objmap::sim {
+
+/// The ground-truth detector: boxes from the instance image, with the errors of a real one.
+struct DetectorNoiseConfig {
+  /// Objects showing fewer pixels are never detected.
+  int min_visible_px = 150;
+  /// Chance to miss a detectable object; grows towards 1 for small (below small_object_px
+  /// visible pixels) and far (beyond far_m) objects.
+  double miss_probability = 0.1;
+  int small_object_px = 1500;
+  double far_m = 3.0;
+  /// Chance to report a look-alike class instead (tv/laptop, cup/bowl, chair/couch, ...).
+  double confusion_probability = 0.05;
+  /// Expected spurious detections per frame (a random box, a random indoor class).
+  double false_positives_per_frame = 0.05;
+  /// Sigma of each box edge, as a fraction of the box's width or height.
+  double box_jitter = 0.05;
+  /// Scores of real detections ~ N(mean, sigma) clamped to [0.2, 0.99]; spurious ones are lower.
+  double score_mean = 0.65;
+  double score_sigma = 0.15;
+
+  [[nodiscard]] bool IsValid(std::string* why) const;
+};
+
+/// Detections of one rendered frame; deterministic for (seed, frame_index).
+[[nodiscard]] std::vector<Detection> DetectFromInstances(const Scene& scene,
+                                                         const RenderedFrame& frame,
+                                                         const Eigen::Isometry3d& T_W_C,
+                                                         const DetectorNoiseConfig& config,
+                                                         std::uint64_t seed, int frame_index);
+
+/// ground_truth.json of the scene: per object id, class, name, box pose (4x4 row by row) and
+/// size (metres) from its mesh, and `surface_points` samples of its surface (world frame).
+[[nodiscard]] std::string GroundTruthJson(const Scene& scene, int surface_points);
+
+struct SequenceOptions {
+  DepthNoiseConfig depth_noise;
+  DetectorNoiseConfig detector;
+  int surface_points = 2000;  ///< per object in ground_truth.json
+};
+
+/// Renders every pose of the scene's trajectory into `dir` (created when missing). False with
+/// a reason naming the file that could not be written.
+[[nodiscard]] bool WriteSequence(const Scene& scene, const SequenceOptions& options,
+                                 const std::string& dir, std::string* why);
+
+}  // namespace objmap::sim

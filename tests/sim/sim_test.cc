@@ -1,0 +1,223 @@
+// The synthetic scene generator: determinism, the depth noise model on a known plane, the
+// ground-truth detector, and a written sequence read back by the 7-Scenes reader.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "dataset/sequence_reader.h"
+#include "detection/detections_file.h"
+#include "evaluation/evaluation_io.h"
+#include "sim/renderer.h"
+#include "sim/scene.h"
+#include "sim/sequence_writer.h"
+#include "types/coco_classes.h"
+
+namespace objmap::sim {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A wall facing the camera at `distance` metres: the camera looks along +z from the origin.
+Scene WallScene(double distance) {
+  Scene scene;
+  scene.intrinsics.width = 640;
+  scene.intrinsics.height = 480;
+  scene.intrinsics.fx = scene.intrinsics.fy = 585.0;
+  scene.intrinsics.cx = 320.0;
+  scene.intrinsics.cy = 240.0;
+  const float d = static_cast<float>(distance);
+  scene.structure.AddBox({-5.f, -5.f, d}, {5.f, 5.f, d + 0.1f}, {200, 200, 200});
+  scene.trajectory = {Eigen::Isometry3d::Identity()};
+  return scene;
+}
+
+TEST(SimScene, TheSameSeedGivesTheSameFramesAndAnotherSeedAnotherScene) {
+  Scene a, b, c;
+  std::string why;
+  ASSERT_TRUE(MakeScene("office", 7, 5, &a, &why)) << why;
+  ASSERT_TRUE(MakeScene("office", 7, 5, &b, &why)) << why;
+  ASSERT_TRUE(MakeScene("office", 8, 5, &c, &why)) << why;
+  ASSERT_EQ(a.objects.size(), b.objects.size());
+  const RenderedFrame fa = Render(a, a.trajectory[2], DepthNoiseConfig{}, a.seed, 2);
+  const RenderedFrame fb = Render(b, b.trajectory[2], DepthNoiseConfig{}, b.seed, 2);
+  EXPECT_EQ(fa.depth.depth_m, fb.depth.depth_m);
+  EXPECT_EQ(fa.color.rgb, fb.color.rgb);
+  EXPECT_EQ(fa.instance, fb.instance);
+  // Another frame index draws other noise; another seed places the objects elsewhere.
+  const RenderedFrame other = Render(a, a.trajectory[2], DepthNoiseConfig{}, a.seed, 3);
+  EXPECT_NE(other.depth.depth_m, fa.depth.depth_m);
+  EXPECT_FALSE(a.objects[0].T_W_O.isApprox(c.objects[0].T_W_O));
+  EXPECT_FALSE(MakeScene("garage", 1, 5, &c, &why));
+  EXPECT_NE(why.find("unknown scene kind 'garage'"), std::string::npos) << why;
+}
+
+TEST(SimScene, TheHardCasesAreInTheOffice) {
+  Scene scene;
+  std::string why;
+  ASSERT_TRUE(MakeScene("office", 1, 2, &scene, &why)) << why;
+  int tvs = 0, keyboards = 0, cups = 0, books = 0, chairs = 0;
+  for (const SceneObject& object : scene.objects) {
+    const std::string name(CocoClassName(object.class_id));
+    tvs += name == "tv", keyboards += name == "keyboard", cups += name == "cup";
+    books += name == "book", chairs += name == "chair";
+  }
+  EXPECT_EQ(tvs, 2);  // side by side
+  EXPECT_EQ(keyboards, 1);
+  EXPECT_EQ(cups, 2);  // close together
+  EXPECT_EQ(books, 3);  // stacked
+  EXPECT_GE(chairs, 1);  // one under the desk
+}
+
+TEST(SimRenderer, APlaneAtAKnownDistanceReadsWithinTheNoiseModel) {
+  const double distance = 2.0;
+  const Scene scene = WallScene(distance);
+  const DepthNoiseConfig noise;
+  DepthNoiseConfig exact = noise;
+  exact.enabled = false;
+  const RenderedFrame clean = Render(scene, scene.trajectory[0], exact, 1, 0);
+  EXPECT_NEAR(clean.depth.depth_m[240 * 640 + 320], distance, 1e-5);
+  EXPECT_NEAR(clean.depth.depth_m[10 * 640 + 10], distance, 1e-5);  // depth is z, not range
+
+  const RenderedFrame noisy = Render(scene, scene.trajectory[0], noise, 1, 0);
+  const double sigma = noise.axial_a_m + noise.axial_b_per_m * (distance - noise.axial_z0_m) *
+                                             (distance - noise.axial_z0_m);
+  // Depths are fx * baseline / (k / subpixels) for whole k: about z^2 / (8 fx b) apart.
+  const double fb = 585.0 * noise.baseline_m;
+  const double step = distance * distance / (noise.disparity_subpixels * fb);
+  double sum = 0.0, sum2 = 0.0;
+  int n = 0, off_grid = 0;
+  for (int v = 100; v < 380; ++v) {
+    for (int u = 100; u < 540; ++u) {
+      const double z = noisy.depth.depth_m[v * 640 + u];
+      ASSERT_GT(z, 0.0);
+      sum += z, sum2 += z * z, ++n;
+      const double k = noise.disparity_subpixels * fb / z;
+      if (std::abs(k - std::round(k)) > 1e-3) ++off_grid;
+    }
+  }
+  const double mean = sum / n, sd = std::sqrt(sum2 / n - mean * mean);
+  EXPECT_NEAR(mean, distance, 0.002);
+  // Gaussian axial noise plus the quantization's uniform error.
+  const double expected_sd = std::sqrt(sigma * sigma + step * step / 12.0);
+  EXPECT_GT(sd, 0.8 * expected_sd);
+  EXPECT_LT(sd, 1.2 * expected_sd);
+  EXPECT_EQ(off_grid, 0);
+}
+
+TEST(SimRenderer, GrazingSurfacesAndFarPixelsReadNothing) {
+  Scene scene = WallScene(2.0);
+  // Turn the wall by 85 degrees about the vertical axis: seen almost edge-on.
+  Eigen::Isometry3f turn = Eigen::Isometry3f::Identity();
+  turn.translate(Eigen::Vector3f(0.f, 0.f, 2.f));
+  turn.rotate(Eigen::AngleAxisf(85.f * static_cast<float>(M_PI) / 180.f, Eigen::Vector3f::UnitY()));
+  turn.translate(Eigen::Vector3f(0.f, 0.f, -2.f));
+  TriangleMesh turned;
+  turned.Append(scene.structure, turn);
+  scene.structure = turned;
+  const DepthNoiseConfig noise;
+  const RenderedFrame frame = Render(scene, scene.trajectory[0], noise, 1, 0);
+  // The wall's normal, and the angle each pixel's ray makes with it.
+  const Eigen::Vector3f normal = turn.linear() * Eigen::Vector3f(0.f, 0.f, -1.f);
+  const double cos_limit = std::cos(noise.max_incidence_deg * M_PI / 180.0);
+  int grazing = 0, grazing_read = 0, steep_read = 0;
+  for (int v = 0; v < 480; ++v) {
+    for (int u = 0; u < 640; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * 640 + u;
+      const float z = frame.true_depth_m[i];
+      if (z <= 0.6f || z >= 4.4f) continue;  // inside the valid range
+      const Eigen::Vector3f ray = Eigen::Vector3f((u - 320.f) / 585.f, (v - 240.f) / 585.f, 1.f).normalized();
+      const double incidence = std::abs(normal.dot(ray));
+      if (incidence < cos_limit - 0.01) {
+        ++grazing;
+        grazing_read += frame.depth.depth_m[i] > 0.f;
+      } else if (incidence > cos_limit + 0.05) {
+        steep_read += frame.depth.depth_m[i] > 0.f;
+      }
+    }
+  }
+  EXPECT_GT(grazing, 1000);
+  EXPECT_EQ(grazing_read, 0);
+  EXPECT_GT(steep_read, 1000);
+  // Beyond 4.5 m nothing reads either.
+  const Scene far = WallScene(6.0);
+  const RenderedFrame far_frame = Render(far, far.trajectory[0], DepthNoiseConfig{}, 1, 0);
+  EXPECT_EQ(far_frame.depth.depth_m[240 * 640 + 320], 0.f);
+  EXPECT_NEAR(far_frame.true_depth_m[240 * 640 + 320], 6.0, 1e-5);
+}
+
+TEST(SimDetector, APerfectDetectorBoxesEveryVisibleObjectAndConfusionSwapsLookAlikes) {
+  Scene scene;
+  std::string why;
+  ASSERT_TRUE(MakeScene("office", 3, 60, &scene, &why)) << why;
+  const Eigen::Isometry3d& T_W_C = scene.trajectory[30];
+  const RenderedFrame frame = Render(scene, T_W_C, DepthNoiseConfig{}, scene.seed, 30);
+  DetectorNoiseConfig perfect;
+  perfect.miss_probability = perfect.confusion_probability = 0.0;
+  perfect.false_positives_per_frame = perfect.box_jitter = 0.0;
+  perfect.small_object_px = perfect.min_visible_px;
+  const std::vector<Detection> found =
+      DetectFromInstances(scene, frame, T_W_C, perfect, scene.seed, 30);
+  // Every object showing enough pixels, boxed exactly by its pixels.
+  int visible = 0;
+  for (const SceneObject& object : scene.objects) {
+    int pixels = 0, u_min = 640;
+    for (int i = 0; i < 640 * 480; ++i) {
+      if (frame.instance[i] != object.id) continue;
+      ++pixels;
+      u_min = std::min(u_min, i % 640);
+    }
+    if (pixels < perfect.min_visible_px) continue;
+    ++visible;
+    const bool boxed = std::any_of(found.begin(), found.end(), [&](const Detection& d) {
+      return d.class_id == object.class_id && d.box.x_min == static_cast<float>(u_min);
+    });
+    EXPECT_TRUE(boxed) << object.name;
+  }
+  EXPECT_EQ(static_cast<int>(found.size()), visible);
+  EXPECT_GE(visible, 8);
+
+  DetectorNoiseConfig confused = perfect;
+  confused.confusion_probability = 1.0;
+  for (const Detection& d : DetectFromInstances(scene, frame, T_W_C, confused, scene.seed, 30)) {
+    EXPECT_NE(std::string(CocoClassName(d.class_id)), "tv");  // a tv is always called a laptop
+  }
+}
+
+TEST(SimSequence, AWrittenSequenceReadsBackWithItsGroundTruthAndDetections) {
+  Scene scene;
+  std::string why;
+  ASSERT_TRUE(MakeScene("desk", 5, 3, &scene, &why)) << why;
+  const fs::path dir = fs::temp_directory_path() / ("objmap_sim_" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  ASSERT_TRUE(WriteSequence(scene, SequenceOptions{}, dir.string(), &why)) << why;
+
+  std::unique_ptr<SequenceReader> reader = OpenSequence(dir.string(), &why);
+  ASSERT_TRUE(reader) << why;
+  ASSERT_EQ(reader->size(), 3u);
+  RgbdFrame frame;
+  ASSERT_TRUE(reader->ReadFrame(1, &frame, &why)) << why;
+  EXPECT_DOUBLE_EQ(frame.intrinsics.fx, 585.0);
+  EXPECT_TRUE(frame.T_W_C.isApprox(scene.trajectory[1], 1e-9));
+  const RenderedFrame rendered = Render(scene, scene.trajectory[1], DepthNoiseConfig{}, scene.seed, 1);
+  for (std::size_t i = 0; i < rendered.depth.depth_m.size(); i += 997) {
+    EXPECT_NEAR(frame.depth.depth_m[i], rendered.depth.depth_m[i], 0.0006) << i;  // mm rounding
+  }
+
+  std::vector<GroundTruthObject> truth;
+  ASSERT_TRUE(ReadGroundTruth((dir / "ground_truth.json").string(), &truth, &why)) << why;
+  ASSERT_EQ(truth.size(), scene.objects.size());
+  for (std::size_t k = 0; k < truth.size(); ++k) {
+    EXPECT_EQ(truth[k].class_id, scene.objects[k].class_id);
+    EXPECT_EQ(truth[k].surface_W.size(), 2000u);
+    EXPECT_GT(truth[k].size_m.minCoeff(), 0.0);
+  }
+  DetectionsByFrame detections;
+  ASSERT_TRUE(ReadDetectionsFile((dir / "detections.json").string(), &detections, &why)) << why;
+  EXPECT_GT(detections.size(), 0u);
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace objmap::sim
