@@ -5,6 +5,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <map>
 #include <memory>
 
 #include "arguments.h"
@@ -13,6 +14,7 @@
 #include "detection/detections_file.h"
 #include "mapper/map_export.h"
 #include "pipeline/sequence_runner.h"
+#include "poses_file.h"
 #include "progress_bar.h"
 #include "types/coco_classes.h"
 
@@ -36,7 +38,10 @@ constexpr char kMapUsage[] =
     "  --min-confidence C        inventory: confidence an object needs (default 0.2)\n"
     "  --min-detection-rate R    inventory: share of the keyframes seeing an object that must\n"
     "                            detect it (default 0.5; 0 = the paper's rule)\n"
-    "  --stop-on-error           stop at the first bad frame instead of skipping it\n";
+    "  --stop-on-error           stop at the first bad frame instead of skipping it\n"
+    "  --corrected-poses FILE    after the run, apply these poses as a pose-graph update (lines\n"
+    "                            `frame_index tx ty tz qx qy qz qw`, T_W_C) and regenerate the\n"
+    "                            map; keyframes whose frame has no line keep their pose\n";
 
 // Wraps a detector and keeps what it found per frame, for --save-detections.
 class RecordingDetector : public Detector {
@@ -155,13 +160,42 @@ int Fail(const std::string& message) {
   return 1;
 }
 
+// A loop closure after the run: the corrected poses of the frames that became keyframes, applied
+// with Mapper::UpdatePoses (which regenerates the object models and the OctoMap).
+bool ApplyCorrectedPoses(const std::string& path, const SequenceRunReport& report, Mapper* mapper,
+                         std::string* why) {
+  std::vector<KeyframePoseLine> lines;
+  if (!ReadPosesFile(path, &lines, why)) return false;
+  std::map<std::size_t, Eigen::Isometry3d> by_frame;
+  for (const KeyframePoseLine& line : lines) {
+    by_frame[static_cast<std::size_t>(line.keyframe_id)] = line.T_W_C;
+  }
+  std::map<KeyframeId, Eigen::Isometry3d> poses;
+  for (const KeyframeReport& keyframe : report.keyframes) {
+    const auto it = by_frame.find(keyframe.frame_index);
+    if (it != by_frame.end()) poses[keyframe.result.keyframe_id] = it->second;
+  }
+  int moved = 0;
+  const auto start = std::chrono::steady_clock::now();
+  if (!mapper->UpdatePoses(poses, why, &moved)) {
+    *why = path + ": " + *why;
+    return false;
+  }
+  std::cout << "corrected poses: " << moved << " of " << report.keyframes.size()
+            << " keyframes moved; map regenerated in " << std::fixed << std::setprecision(1)
+            << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()
+            << " s\n";
+  return true;
+}
+
 }  // namespace
 
 int RunMapCommand(int argc, char** argv) {
   Arguments args(argc, argv,
                  {"--out", "--model", "--detections", "--save-detections", "--score-threshold",
                   "--first-frame", "--max-frames", "--min-translation", "--min-rotation",
-                  "--min-observations", "--min-confidence", "--min-detection-rate"},
+                  "--min-observations", "--min-confidence", "--min-detection-rate",
+                  "--corrected-poses"},
                  {"--every-frame", "--stop-on-error", "--help"});
   if (args.Has("--help")) {
     std::cout << kMapUsage;
@@ -196,6 +230,10 @@ int RunMapCommand(int argc, char** argv) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   for (const std::string& message : report.skipped) std::cerr << "skipped " << message << "\n";
   if (!completed) std::cerr << "\nobjmap map: stopped at " << why << "\n";
+  if (args.Has("--corrected-poses") &&
+      !ApplyCorrectedPoses(args.Get("--corrected-poses", ""), report, &mapper, &why)) {
+    return Fail(why);
+  }
   PrintSummary(mapper, report, wall_s);
 
   const std::string out_dir = args.Get("--out", "");

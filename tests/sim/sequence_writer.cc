@@ -82,6 +82,42 @@ bool DetectorNoiseConfig::IsValid(std::string* why) const {
   return true;
 }
 
+bool DriftConfig::IsValid(std::string* why) const {
+  if (!std::isfinite(yaw_bias_deg_per_m) || !(yaw_noise_deg_per_m >= 0.0) ||
+      !(scale_error > -0.5 && scale_error < 0.5)) {
+    *why = "DriftConfig: finite yaw bias, yaw noise >= 0 and |scale_error| < 0.5 are required";
+    return false;
+  }
+  return true;
+}
+
+std::vector<Eigen::Isometry3d> DriftedTrajectory(const std::vector<Eigen::Isometry3d>& trajectory,
+                                                 const DriftConfig& drift, std::uint64_t seed) {
+  std::vector<Eigen::Isometry3d> drifted;
+  if (trajectory.empty()) return drifted;
+  drifted.push_back(trajectory.front());
+  Random random(seed, 0xD81F7ull);
+  for (std::size_t k = 1; k < trajectory.size(); ++k) {
+    // The motion between frames as odometry measures it: longer by the scale error, and turned
+    // about the vertical by an error that grows with the distance.
+    const Eigen::Isometry3d step = trajectory[k - 1].inverse() * trajectory[k];
+    const Eigen::Vector3d move_W = trajectory[k - 1].linear() * step.translation();
+    const double metres = move_W.norm();
+    const double yaw_deg = drift.yaw_bias_deg_per_m * metres +
+                           drift.yaw_noise_deg_per_m * metres * random.Normal();
+    const Eigen::Matrix3d turn =
+        Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    Eigen::Isometry3d next = Eigen::Isometry3d::Identity();
+    // World-frame increments applied to the drifted pose: heading error accumulates, so later
+    // moves go in a turned direction.
+    const Eigen::Matrix3d heading = drifted.back().linear() * trajectory[k - 1].linear().transpose();
+    next.linear() = turn * heading * trajectory[k].linear();
+    next.translation() = drifted.back().translation() + turn * heading * move_W * (1.0 + drift.scale_error);
+    drifted.push_back(next);
+  }
+  return drifted;
+}
+
 std::vector<Detection> DetectFromInstances(const Scene& scene, const RenderedFrame& frame,
                                            const Eigen::Isometry3d& T_W_C,
                                            const DetectorNoiseConfig& config, std::uint64_t seed,
@@ -174,7 +210,14 @@ std::string GroundTruthJson(const Scene& scene, int surface_points) {
 
 bool WriteSequence(const Scene& scene, const SequenceOptions& options, const std::string& dir,
                    std::string* why) {
-  if (!options.depth_noise.IsValid(why) || !options.detector.IsValid(why)) return false;
+  if (!options.depth_noise.IsValid(why) || !options.detector.IsValid(why) ||
+      !options.drift.IsValid(why)) {
+    return false;
+  }
+  // What the tracker reports; the frames are rendered from the true poses.
+  const std::vector<Eigen::Isometry3d> reported =
+      options.drift.enabled ? DriftedTrajectory(scene.trajectory, options.drift, scene.seed)
+                            : scene.trajectory;
   std::error_code error;
   fs::create_directories(dir, error);
   if (error) {
@@ -208,7 +251,7 @@ bool WriteSequence(const Scene& scene, const SequenceOptions& options, const std
     }
     if (!WritePng(stem + ".color.png", color, why) || !WritePng(stem + ".depth.png", depth, why) ||
         !WritePng(stem + ".instance.png", instance, why) ||
-        !WriteMatrix(stem + ".pose.txt", T_W_C.matrix(), 4, why)) {
+        !WriteMatrix(stem + ".pose.txt", reported[f].matrix(), 4, why)) {
       return false;
     }
     detections[std::to_string(index)] =
@@ -216,6 +259,23 @@ bool WriteSequence(const Scene& scene, const SequenceOptions& options, const std
   }
   if (!WriteDetectionsFile((fs::path(dir) / "detections.json").string(), detections, why)) {
     return false;
+  }
+  if (options.drift.enabled) {
+    const std::string path = (fs::path(dir) / "corrected_poses.txt").string();
+    std::ofstream corrected(path);
+    corrected << "# frame_index tx ty tz qx qy qz qw: the true T_W_C of each frame\n";
+    char line[256];
+    for (std::size_t f = 0; f < scene.trajectory.size(); ++f) {
+      const Eigen::Quaterniond q(scene.trajectory[f].linear());
+      const Eigen::Vector3d t = scene.trajectory[f].translation();
+      std::snprintf(line, sizeof(line), "%zu %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", f, t.x(),
+                    t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+      corrected << line;
+    }
+    if (!corrected) {
+      *why = path + ": write failed";
+      return false;
+    }
   }
   const std::string gt_path = (fs::path(dir) / "ground_truth.json").string();
   std::ofstream gt(gt_path);

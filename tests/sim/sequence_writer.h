@@ -2,8 +2,8 @@
 // A synthetic scene written as a recorded sequence in the 7-Scenes layout the readers take
 // (frame-NNNNNN.color.png, .depth.png in mm, .pose.txt, camera-intrinsics.txt) plus
 // frame-NNNNNN.instance.png (16-bit instance ids), detections.json (the ground-truth detector's
-// output, in the format of `objmap map --detections`) and ground_truth.json (the format of
-// `objmap eval --gt`).
+// output, in the format of `objmap map --detections`), ground_truth.json (the format of
+// `objmap eval --gt`) and, with drift, corrected_poses.txt (`objmap map --corrected-poses`).
 
 #include <cstdint>
 #include <string>
@@ -48,9 +48,28 @@ struct DetectorNoiseConfig {
 /// size (metres) from its mesh, and `surface_points` samples of its surface (world frame).
 [[nodiscard]] std::string GroundTruthJson(const Scene& scene, int surface_points);
 
+/// Odometry drift: the poses written with the frames are what a drifting tracker reports; the
+/// true ones go to corrected_poses.txt, as a loop closure would give them back.
+struct DriftConfig {
+  bool enabled = false;
+  /// Heading error per metre travelled (a bias), and its frame-to-frame noise, degrees.
+  double yaw_bias_deg_per_m = 2.0;
+  double yaw_noise_deg_per_m = 0.5;
+  /// Odometry scale error: travelled distances come out this fraction too long.
+  double scale_error = 0.02;
+
+  [[nodiscard]] bool IsValid(std::string* why) const;
+};
+
+/// The poses a drifting tracker reports along `trajectory` (the first pose is exact).
+[[nodiscard]] std::vector<Eigen::Isometry3d> DriftedTrajectory(
+    const std::vector<Eigen::Isometry3d>& trajectory, const DriftConfig& drift,
+    std::uint64_t seed);
+
 struct SequenceOptions {
   DepthNoiseConfig depth_noise;
   DetectorNoiseConfig detector;
+  DriftConfig drift;
   int surface_points = 2000;  ///< per object in ground_truth.json
 };
 

@@ -1,5 +1,5 @@
 // objmap_sim: writes a synthetic scene as a recorded sequence with ground truth.
-//   objmap_sim --out DIR [--kind office|desk] [--seed N] [--frames N] [--perfect]
+//   objmap_sim --out DIR [--kind office|desk] [--seed N] [--frames N] [--perfect] [--drift]
 #include <cstdlib>
 #include <iostream>
 #include <string>
@@ -11,12 +11,15 @@ namespace {
 
 constexpr char kUsage[] =
     "usage: objmap_sim --out DIR [--kind office|desk] [--seed N] [--frames N] [--perfect]\n"
+    "                  [--drift]\n"
     "  writes DIR/frame-NNNNNN.{color,depth,instance}.png and .pose.txt, camera-intrinsics.txt,\n"
     "  detections.json (the ground-truth detector) and ground_truth.json\n"
     "  --kind K     scene kind (default office)\n"
     "  --seed N     scene, noise and detector seed (default 1)\n"
     "  --frames N   frames along the camera sweep (default 300)\n"
-    "  --perfect    no depth noise and a detector without errors\n";
+    "  --perfect    no depth noise and a detector without errors\n"
+    "  --drift      the pose files hold drifting odometry (2 deg/m heading, 2 % scale);\n"
+    "               corrected_poses.txt holds the true poses for `objmap map --corrected-poses`\n";
 
 }  // namespace
 
@@ -24,7 +27,7 @@ int main(int argc, char** argv) {
   std::string out, kind = "office";
   std::uint64_t seed = 1;
   int frames = 300;
-  bool perfect = false;
+  bool perfect = false, drift = false;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     const bool has_value = i + 1 < argc;
@@ -38,6 +41,8 @@ int main(int argc, char** argv) {
       frames = std::atoi(argv[++i]);
     } else if (arg == "--perfect") {
       perfect = true;
+    } else if (arg == "--drift") {
+      drift = true;
     } else if (arg == "--help") {
       std::cout << kUsage;
       return 0;
@@ -64,6 +69,7 @@ int main(int argc, char** argv) {
     options.detector.false_positives_per_frame = 0.0;
     options.detector.box_jitter = 0.0;
   }
+  options.drift.enabled = drift;
   if (!objmap::sim::WriteSequence(scene, options, out, &why)) {
     std::cerr << "objmap_sim: " << why << "\n";
     return 1;

@@ -185,6 +185,26 @@ TEST(SimDetector, APerfectDetectorBoxesEveryVisibleObjectAndConfusionSwapsLookAl
   }
 }
 
+TEST(SimDrift, OdometryDriftGrowsAlongTheSweepAndVanishesWithoutErrors) {
+  Scene scene;
+  std::string why;
+  ASSERT_TRUE(MakeScene("office", 1, 300, &scene, &why)) << why;
+  const std::vector<Eigen::Isometry3d> drifted =
+      DriftedTrajectory(scene.trajectory, DriftConfig{}, scene.seed);
+  ASSERT_EQ(drifted.size(), scene.trajectory.size());
+  EXPECT_TRUE(drifted.front().isApprox(scene.trajectory.front()));
+  const Eigen::Isometry3d error = scene.trajectory.back().inverse() * drifted.back();
+  // About 3.5 m travelled: several degrees and centimetres off at the end.
+  EXPECT_GT(Eigen::AngleAxisd(error.linear()).angle() * 180.0 / M_PI, 3.0);
+  EXPECT_GT((drifted.back().translation() - scene.trajectory.back().translation()).norm(), 0.05);
+  DriftConfig none;
+  none.yaw_bias_deg_per_m = none.yaw_noise_deg_per_m = none.scale_error = 0.0;
+  const std::vector<Eigen::Isometry3d> exact = DriftedTrajectory(scene.trajectory, none, 1);
+  for (std::size_t k = 0; k < exact.size(); k += 37) {
+    EXPECT_TRUE(exact[k].isApprox(scene.trajectory[k], 1e-9)) << k;
+  }
+}
+
 TEST(SimSequence, AWrittenSequenceReadsBackWithItsGroundTruthAndDetections) {
   Scene scene;
   std::string why;
