@@ -79,7 +79,9 @@ void DrawMesh(const TriangleMesh& mesh, const Eigen::Isometry3f& T_C_M, std::uin
     Eigen::Vector3f normal = (c1 - a).cross(c2 - a);
     if (normal.squaredNorm() < 1e-20f) continue;
     normal.normalize();
-    if (normal.dot(a) >= 0.f) continue;  // faces away from the camera
+    // Both sides are drawn (catalog meshes are not all closed or consistently wound); the
+    // normal is turned towards the camera for shading and the incidence test.
+    if (normal.dot(a) > 0.f) normal = -normal;
     const std::vector<Eigen::Vector3f> polygon = ClipNear({a, c1, c2});
     for (std::size_t k = 1; k + 1 < polygon.size(); ++k) {
       FillTriangle(polygon[0], polygon[k], polygon[k + 1], normal, id, mesh.colors[t], K, b);

@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <map>
 
+#include "sim/furniture_catalog.h"
 #include "sim/sim_random.h"
 #include "types/coco_classes.h"
 
@@ -120,16 +123,37 @@ TriangleMesh Laptop(const Rgb& color, const Rgb& screen) {
   return mesh;
 }
 
+// Catalog names that may stand in for a procedural object of each class.
+const std::map<std::string, std::vector<std::string>>& CatalogNames() {
+  static const std::map<std::string, std::vector<std::string>> names = {
+      {"dining table", {"Table", "Wooden table", "Technical table", "Wooden teak table"}},
+      {"chair", {"Chair", "Chair with cushion", "Folding chair"}},
+      {"tv", {"TV", "TV 16:9", "Wall flat TV"}},
+      {"cup", {"Coffee mug", "Plastic cup"}},
+      {"book", {"Book"}},
+      {"laptop", {"Laptop"}},
+      {"potted plant", {"Plant", "Decorative plant", "Spider plant", "Succulent plant"}},
+      {"sink", {"Sink"}},
+      {"microwave", {"Microwave"}},
+      {"oven", {"Small oven"}},
+      {"refrigerator", {"Refrigerator"}},
+      {"bottle", {"Bottle", "Wine bottle"}}};
+  return names;
+}
+
 class SceneBuilder {
  public:
-  SceneBuilder(Scene* scene, Random* random) : scene_(scene), random_(random) {}
+  SceneBuilder(Scene* scene, Random* random, const FurnitureCatalog* catalog)
+      : scene_(scene), random_(random), catalog_(catalog) {}
+  // Adds an object; with a catalog, a real mesh of its class scaled into the procedural mesh's
+  // bounds replaces it (the procedural one stays when none loads).
   void Add(const char* class_name, const std::string& name, const TriangleMesh& mesh,
            const Eigen::Vector3f& position, float yaw) {
     SceneObject object;
     object.id = static_cast<int>(scene_->objects.size()) + 1;
     object.class_id = CocoClassId(class_name);
     object.name = name;
-    object.mesh = mesh;
+    object.mesh = Dress(class_name, mesh, object.id, &object.name);
     object.T_W_O = Pose(position, yaw).cast<double>();
     scene_->objects.push_back(std::move(object));
   }
@@ -137,8 +161,35 @@ class SceneBuilder {
   Scene& scene() { return *scene_; }
 
  private:
+  // The pick has a random stream of its own, so that dressing a scene moves nothing in it.
+  TriangleMesh Dress(const std::string& class_name, const TriangleMesh& procedural, int id,
+                     std::string* name) {
+    const auto names = CatalogNames().find(class_name);
+    if (catalog_ == nullptr || names == CatalogNames().end()) return procedural;
+    std::vector<const FurnitureEntry*> candidates = catalog_->Named(names->second);
+    candidates.erase(std::remove_if(candidates.begin(), candidates.end(),
+                                    [](const FurnitureEntry* e) { return e->category == "Exterior"; }),
+                     candidates.end());
+    if (candidates.empty()) return procedural;
+    Random pick(scene_->seed, 0xCA7A106ull, static_cast<std::uint64_t>(id));
+    const FurnitureEntry& entry = *candidates[pick.Next() % candidates.size()];
+    TriangleMesh mesh;
+    std::string why;
+    if (!catalog_->LoadMesh(entry, &mesh, &why)) return procedural;
+    Eigen::Vector3f want_min, want_max, have_min, have_max;
+    procedural.Bounds(&want_min, &want_max);
+    mesh.Bounds(&have_min, &have_max);
+    const Eigen::Vector3f scale =
+        (want_max - want_min).cwiseQuotient((have_max - have_min).cwiseMax(1e-6f));
+    for (Eigen::Vector3f& v : mesh.vertices) v = want_min + (v - have_min).cwiseProduct(scale);
+    *name += " (" + entry.name + " by " + entry.creator + ", " +
+             std::filesystem::path(entry.archive).filename().string() + ")";
+    return mesh;
+  }
+
   Scene* scene_;
   Random* random_;
+  const FurnitureCatalog* catalog_;
 };
 
 // Floor, walls and a ceiling of a w x d x h room with its corner at the origin.
@@ -195,6 +246,99 @@ void AddDesk(SceneBuilder* b, const Eigen::Vector3f& centre, bool two_monitors) 
   // A chair pushed under the desk: its seat is under the top, its back in front of the edge.
   b->Add("chair", "desk chair", Chair(Jitter({60, 60, 70}, &r)),
          centre + Eigen::Vector3f(static_cast<float>(r.Uniform(-0.2, 0.2)), -0.25f, 0.f), kPi);
+}
+
+TriangleMesh Bottle(const Rgb& color) {
+  TriangleMesh mesh;
+  mesh.AddCylinder({0.f, 0.f, 0.f}, 0.035f, 0.2f, 12, color);
+  mesh.AddCylinder({0.f, 0.f, 0.2f}, 0.014f, 0.08f, 8, color);
+  return mesh;
+}
+
+// A box appliance standing on z = 0 with a darker front panel (door, window) facing -y.
+TriangleMesh Appliance(float width, float depth, float height, const Rgb& body, const Rgb& front) {
+  TriangleMesh mesh;
+  mesh.AddBox({-width / 2, -depth / 2, 0.f}, {width / 2, depth / 2, height}, body);
+  mesh.AddBox({-width / 2 + 0.03f, -depth / 2 - 0.005f, 0.04f},
+              {width / 2 - 0.03f, -depth / 2, height - 0.04f}, front);
+  return mesh;
+}
+
+// A sink basin: a rim around a recess, set into a counter top.
+TriangleMesh Sink(const Rgb& steel) {
+  TriangleMesh mesh;
+  const float w = 0.6f, d = 0.45f, rim = 0.04f, depth = 0.15f;
+  mesh.AddBox({-w / 2, -d / 2, -depth}, {w / 2, d / 2, -depth + 0.01f}, steel);  // bottom
+  mesh.AddBox({-w / 2, -d / 2, -depth}, {-w / 2 + rim, d / 2, 0.01f}, steel);
+  mesh.AddBox({w / 2 - rim, -d / 2, -depth}, {w / 2, d / 2, 0.01f}, steel);
+  mesh.AddBox({-w / 2, -d / 2, -depth}, {w / 2, -d / 2 + rim, 0.01f}, steel);
+  mesh.AddBox({-w / 2, d / 2 - rim, -depth}, {w / 2, d / 2, 0.01f}, steel);
+  mesh.AddCylinder({0.f, d / 2 - 0.05f, 0.01f}, 0.015f, 0.25f, 8, steel);  // tap
+  return mesh;
+}
+
+// A kitchen: a counter along the back wall with a sink, a microwave and bottles, a
+// refrigerator and an oven beside it, a dining table with two cups side by side and chairs.
+Eigen::Vector3d AddKitchen(SceneBuilder* b, TriangleMesh* structure) {
+  Random& r = b->random();
+  const float counter_top = 0.9f;
+  structure->AddBox({0.9f, 3.85f, 0.f}, {3.7f, 4.45f, counter_top}, Jitter({200, 40, 40}, &r));
+  const Rgb steel = Jitter({180, 180, 185}, &r), white = Jitter({235, 235, 230}, &r);
+  b->Add("refrigerator", "refrigerator", Appliance(0.7f, 0.65f, 1.8f, white, Jitter({210, 210, 205}, &r)),
+         {0.5f, 4.1f, 0.f}, 0.f);
+  b->Add("oven", "oven", Appliance(0.6f, 0.6f, 0.9f, Jitter({60, 60, 60}, &r), {20, 20, 25}),
+         {4.05f, 4.1f, 0.f}, 0.f);
+  b->Add("sink", "sink", Sink(steel), {1.8f, 4.15f, counter_top}, 0.f);
+  b->Add("microwave", "microwave", Appliance(0.5f, 0.38f, 0.3f, white, {30, 30, 35}),
+         {3.1f, 4.15f, counter_top}, static_cast<float>(r.Uniform(-0.1, 0.1)));
+  b->Add("bottle", "bottle 1", Bottle(Jitter({40, 120, 60}, &r)), {2.35f, 4.05f, counter_top}, 0.f);
+  b->Add("bottle", "bottle 2", Bottle(Jitter({120, 60, 30}, &r)), {2.47f, 4.1f, counter_top}, 0.f);
+  const Eigen::Vector3f table(2.3f + static_cast<float>(r.Uniform(-0.2, 0.2)), 2.3f, 0.f);
+  b->Add("dining table", "kitchen table", Table(1.2f, 0.8f, 0.75f, Jitter({170, 130, 90}, &r)),
+         table, 0.f);
+  const Eigen::Vector3f top = table + Eigen::Vector3f(0.f, 0.f, 0.75f);
+  b->Add("cup", "left cup", Cup(Jitter({230, 230, 225}, &r)), top + Eigen::Vector3f(-0.2f, 0.f, 0.f), 0.3f);
+  b->Add("cup", "right cup", Cup(Jitter({40, 80, 180}, &r)), top + Eigen::Vector3f(-0.06f, 0.05f, 0.f), 2.8f);
+  b->Add("chair", "chair left", Chair(Jitter({110, 80, 50}, &r)), table + Eigen::Vector3f(-0.3f, -0.65f, 0.f), kPi);
+  b->Add("chair", "chair right", Chair(Jitter({110, 80, 50}, &r)), table + Eigen::Vector3f(0.35f, 0.65f, 0.f), 0.f);
+  return Eigen::Vector3d(2.3, 3.2, 0.85);
+}
+
+// A lab: two benches with laptops, a monitor with keyboard and mouse, bottles and books, and
+// chairs.
+Eigen::Vector3d AddLab(SceneBuilder* b) {
+  Random& r = b->random();
+  const Rgb grey = Jitter({190, 190, 185}, &r), black = Jitter({40, 40, 45}, &r);
+  const Rgb screen = Jitter({30, 60, 120}, &r);
+  const Eigen::Vector3f back(2.5f, 3.7f, 0.f), front(2.5f, 2.3f, 0.f);
+  b->Add("dining table", "back bench", Table(2.0f, 0.7f, 0.9f, grey), back, 0.f);
+  b->Add("dining table", "front bench", Table(1.6f, 0.7f, 0.9f, grey), front, 0.f);
+  const Eigen::Vector3f back_top = back + Eigen::Vector3f(0.f, 0.f, 0.9f);
+  const Eigen::Vector3f front_top = front + Eigen::Vector3f(0.f, 0.f, 0.9f);
+  // Two laptops side by side on the back bench, a monitor with its keyboard and mouse.
+  b->Add("laptop", "laptop 1", Laptop(Jitter({150, 150, 155}, &r), screen), back_top + Eigen::Vector3f(-0.7f, 0.f, 0.f), 0.1f);
+  b->Add("laptop", "laptop 2", Laptop(Jitter({90, 90, 95}, &r), screen), back_top + Eigen::Vector3f(-0.3f, 0.f, 0.f), -0.1f);
+  b->Add("tv", "monitor", Monitor(0.55f, 0.33f, black, screen), back_top + Eigen::Vector3f(0.45f, 0.15f, 0.f), 0.f);
+  b->Add("keyboard", "keyboard", Keyboard(black, Jitter({70, 70, 75}, &r)), back_top + Eigen::Vector3f(0.42f, -0.18f, 0.f), 0.05f);
+  b->Add("mouse", "mouse", Mouse(black), back_top + Eigen::Vector3f(0.75f, -0.18f, 0.f), 0.f);
+  // Bottles and a stack of two books on the front bench.
+  for (int i = 0; i < 3; ++i) {
+    b->Add("bottle", "bottle " + std::to_string(i + 1), Bottle(Jitter({60, static_cast<std::uint8_t>(110 + 30 * i), 160}, &r)),
+           front_top + Eigen::Vector3f(-0.5f + 0.12f * i, 0.1f, 0.f), 0.f);
+  }
+  b->Add("book", "book 1", Book(0.26f, 0.19f, 0.03f, Jitter({160, 60, 40}, &r)), front_top + Eigen::Vector3f(0.4f, 0.f, 0.f), 0.1f);
+  b->Add("book", "book 2", Book(0.23f, 0.17f, 0.025f, Jitter({40, 60, 160}, &r)), front_top + Eigen::Vector3f(0.4f, 0.f, 0.03f), -0.1f);
+  b->Add("chair", "chair 1", Chair(Jitter({50, 50, 60}, &r)), back + Eigen::Vector3f(-0.5f, -0.6f, 0.f), kPi + 0.2f);
+  b->Add("chair", "chair 2", Chair(Jitter({50, 50, 60}, &r)), back + Eigen::Vector3f(0.45f, -0.65f, 0.f), kPi - 0.3f);
+  b->Add("chair", "chair 3", Chair(Jitter({50, 50, 60}, &r)), front + Eigen::Vector3f(0.2f, -0.6f, 0.f), kPi);
+  return Eigen::Vector3d(2.5, 3.0, 0.9);
+}
+
+// A stable hash of a name (std::hash differs between standard libraries).
+std::uint64_t NameHash(const std::string& name) {
+  std::uint64_t hash = 14695981039346656037ull;
+  for (char c : name) hash = (hash ^ static_cast<unsigned char>(c)) * 1099511628211ull;
+  return hash;
 }
 
 // A camera sweeping an arc in front of `target`, looking at it from about 1.5 m high.
@@ -307,13 +451,13 @@ void TriangleMesh::Bounds(Eigen::Vector3f* min, Eigen::Vector3f* max) const {
   }
 }
 
-std::vector<std::string> SceneKinds() { return {"desk", "office"}; }
+std::vector<std::string> SceneKinds() { return {"desk", "office", "kitchen", "lab"}; }
 
 bool MakeScene(const std::string& kind, std::uint64_t seed, int frames, Scene* scene,
-               std::string* why) {
+               std::string* why, const FurnitureCatalog* catalog) {
   const std::vector<std::string> kinds = SceneKinds();
   if (std::find(kinds.begin(), kinds.end(), kind) == kinds.end()) {
-    *why = "unknown scene kind '" + kind + "' (desk, office)";
+    *why = "unknown scene kind '" + kind + "' (desk, office, kitchen, lab)";
     return false;
   }
   if (frames < 1) {
@@ -329,10 +473,16 @@ bool MakeScene(const std::string& kind, std::uint64_t seed, int frames, Scene* s
   scene->intrinsics.fx = scene->intrinsics.fy = 585.0;
   scene->intrinsics.cx = 320.0;
   scene->intrinsics.cy = 240.0;
-  Random random(seed, std::hash<std::string>{}(kind) & 0xFFFF);
-  SceneBuilder builder(scene, &random);
+  Random random(seed, NameHash(kind));
+  SceneBuilder builder(scene, &random, catalog);
   const float w = 5.f, d = 4.5f, h = 2.7f;
   AddRoom(w, d, h, &random, &scene->structure);
+  if (kind == "kitchen" || kind == "lab") {
+    const Eigen::Vector3d target =
+        kind == "kitchen" ? AddKitchen(&builder, &scene->structure) : AddLab(&builder);
+    scene->trajectory = Sweep(target, 2.0, frames, &random);
+    return true;
+  }
   const Eigen::Vector3f desk(2.5f + static_cast<float>(random.Uniform(-0.2, 0.2)), 3.4f, 0.f);
   AddDesk(&builder, desk, /*two_monitors=*/kind == "office");
   if (kind == "office") {

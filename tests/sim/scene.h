@@ -56,14 +56,18 @@ struct Scene {
   std::vector<Eigen::Isometry3d> trajectory;  ///< T_W_C per frame
 };
 
-/// The scene kinds there are: "desk", "office".
+/// The scene kinds there are: "desk", "office", "kitchen", "lab" (the paper's four sequences).
 [[nodiscard]] std::vector<std::string> SceneKinds();
+
+class FurnitureCatalog;
 
 /// A scene of `kind` with `frames` camera poses; positions, sizes and colours vary with `seed`.
 /// The paper's hard cases are in it: monitors side by side, a flat keyboard on the desk, stacked
-/// books, cups close together, a chair pushed under the desk. False with a reason for an
-/// unknown kind.
+/// books, cups close together, a chair pushed under the desk. With a `catalog`, tables, chairs,
+/// monitors, cups, books, laptops and plants are real furniture meshes (picked by seed, scaled
+/// into the place of the procedural ones); keyboards and mice stay procedural (the catalog's
+/// keyboard is a musical one). False with a reason for an unknown kind.
 [[nodiscard]] bool MakeScene(const std::string& kind, std::uint64_t seed, int frames, Scene* scene,
-                             std::string* why);
+                             std::string* why, const FurnitureCatalog* catalog = nullptr);
 
 }  // namespace objmap::sim

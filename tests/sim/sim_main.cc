@@ -1,23 +1,29 @@
 // objmap_sim: writes a synthetic scene as a recorded sequence with ground truth.
-//   objmap_sim --out DIR [--kind office|desk] [--seed N] [--frames N] [--perfect] [--drift]
+//   objmap_sim --out DIR [--kind desk|office|kitchen|lab] [--seed N] [--frames N] [--perfect] [--drift]
+//              [--procedural]
 #include <cstdlib>
 #include <iostream>
+#include <memory>
 #include <string>
 
+#include "sim/furniture_catalog.h"
 #include "sim/scene.h"
 #include "sim/sequence_writer.h"
 
 namespace {
 
 constexpr char kUsage[] =
-    "usage: objmap_sim --out DIR [--kind office|desk] [--seed N] [--frames N] [--perfect]\n"
-    "                  [--drift]\n"
+    "usage: objmap_sim --out DIR [--kind desk|office|kitchen|lab] [--seed N] [--frames N] [--perfect]\n"
+    "                  [--drift] [--procedural]\n"
     "  writes DIR/frame-NNNNNN.{color,depth,instance}.png and .pose.txt, camera-intrinsics.txt,\n"
     "  detections.json (the ground-truth detector) and ground_truth.json\n"
     "  --kind K     scene kind (default office)\n"
     "  --seed N     scene, noise and detector seed (default 1)\n"
     "  --frames N   frames along the camera sweep (default 300)\n"
     "  --perfect    no depth noise and a detector without errors\n"
+    "  --procedural procedural objects only; by default tables, chairs, monitors, cups, books,\n"
+    "               laptops and plants are furniture meshes of sweethome3d-furniture when it is\n"
+    "               installed\n"
     "  --drift      the pose files hold drifting odometry (2 deg/m heading, 2 % scale);\n"
     "               corrected_poses.txt holds the true poses for `objmap map --corrected-poses`\n";
 
@@ -27,7 +33,7 @@ int main(int argc, char** argv) {
   std::string out, kind = "office";
   std::uint64_t seed = 1;
   int frames = 300;
-  bool perfect = false, drift = false;
+  bool perfect = false, drift = false, procedural = false;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     const bool has_value = i + 1 < argc;
@@ -43,6 +49,8 @@ int main(int argc, char** argv) {
       perfect = true;
     } else if (arg == "--drift") {
       drift = true;
+    } else if (arg == "--procedural") {
+      procedural = true;
     } else if (arg == "--help") {
       std::cout << kUsage;
       return 0;
@@ -55,9 +63,15 @@ int main(int argc, char** argv) {
     std::cerr << "objmap_sim: --out DIR is required\n" << kUsage;
     return 2;
   }
-  objmap::sim::Scene scene;
   std::string why;
-  if (!objmap::sim::MakeScene(kind, seed, frames, &scene, &why)) {
+  std::unique_ptr<objmap::sim::FurnitureCatalog> catalog;
+  if (!procedural) {
+    catalog = objmap::sim::FurnitureCatalog::Open(objmap::sim::FurnitureCatalog::kDefaultFolder,
+                                                  &why);
+    if (!catalog) std::cerr << "objmap_sim: " << why << "; procedural objects only\n";
+  }
+  objmap::sim::Scene scene;
+  if (!objmap::sim::MakeScene(kind, seed, frames, &scene, &why, catalog.get())) {
     std::cerr << "objmap_sim: " << why << "\n";
     return 2;
   }

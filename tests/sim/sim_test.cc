@@ -5,10 +5,13 @@
 
 #include <cmath>
 #include <filesystem>
+#include <map>
+#include <set>
 
 #include "dataset/sequence_reader.h"
 #include "detection/detections_file.h"
 #include "evaluation/evaluation_io.h"
+#include "sim/furniture_catalog.h"
 #include "sim/renderer.h"
 #include "sim/scene.h"
 #include "sim/sequence_writer.h"
@@ -68,6 +71,28 @@ TEST(SimScene, TheHardCasesAreInTheOffice) {
   EXPECT_EQ(cups, 2);  // close together
   EXPECT_EQ(books, 3);  // stacked
   EXPECT_GE(chairs, 1);  // one under the desk
+}
+
+TEST(SimScene, ThePapersFourKindsHoldTheirClasses) {
+  const std::map<std::string, std::vector<std::string>> expected = {
+      {"desk", {"dining table", "laptop", "keyboard", "mouse", "cup", "book", "chair"}},
+      {"office", {"dining table", "tv", "keyboard", "cup", "book", "chair", "potted plant"}},
+      {"kitchen", {"refrigerator", "oven", "sink", "microwave", "bottle", "cup", "chair"}},
+      {"lab", {"dining table", "laptop", "tv", "keyboard", "bottle", "book", "chair"}}};
+  for (const std::string& kind : SceneKinds()) {
+    Scene scene;
+    std::string why;
+    ASSERT_TRUE(MakeScene(kind, 1, 10, &scene, &why)) << why;
+    std::set<std::string> classes;
+    for (const SceneObject& object : scene.objects) classes.insert(std::string(CocoClassName(object.class_id)));
+    for (const std::string& name : expected.at(kind)) {
+      EXPECT_EQ(classes.count(name), 1u) << kind << " lacks " << name;
+    }
+    // Every object is in view of some frame of the sweep.
+    const RenderedFrame middle = Render(scene, scene.trajectory[5], DepthNoiseConfig{}, 1, 5);
+    std::set<int> seen(middle.instance.begin(), middle.instance.end());
+    EXPECT_GE(seen.size(), scene.objects.size() / 2) << kind;
+  }
 }
 
 TEST(SimRenderer, APlaneAtAKnownDistanceReadsWithinTheNoiseModel) {
@@ -203,6 +228,48 @@ TEST(SimDrift, OdometryDriftGrowsAlongTheSweepAndVanishesWithoutErrors) {
   for (std::size_t k = 0; k < exact.size(); k += 37) {
     EXPECT_TRUE(exact[k].isApprox(scene.trajectory[k], 1e-9)) << k;
   }
+}
+
+TEST(SimFurniture, CatalogMeshesLoadUprightAtTheirCatalogSize) {
+  std::string why;
+  const auto catalog = FurnitureCatalog::Open(FurnitureCatalog::kDefaultFolder, &why);
+  if (!catalog) GTEST_SKIP() << "SKIPPED: needs " << why;
+  EXPECT_GT(catalog->entries().size(), 500u);
+  const std::vector<const FurnitureEntry*> mugs = catalog->Named({"Coffee mug"});
+  ASSERT_FALSE(mugs.empty());
+  TriangleMesh mug;
+  ASSERT_TRUE(catalog->LoadMesh(*mugs[0], &mug, &why)) << why;
+  EXPECT_GT(mug.triangles.size(), 100u);
+  EXPECT_EQ(mug.colors.size(), mug.triangles.size());
+  Eigen::Vector3f min, max;
+  mug.Bounds(&min, &max);
+  // Width along x, depth along y, height along z, standing on z = 0 and centred.
+  const Eigen::Vector3f& size = mugs[0]->size_m;
+  EXPECT_NEAR(max.x() - min.x(), size.x(), 1e-3f * size.x() + 1e-5f);
+  EXPECT_NEAR(max.y() - min.y(), size.y(), 1e-3f * size.y() + 1e-5f);
+  EXPECT_NEAR(max.z() - min.z(), size.z(), 1e-3f * size.z() + 1e-5f);
+  EXPECT_NEAR(min.z(), 0.f, 1e-5f);
+  EXPECT_NEAR(min.x() + max.x(), 0.f, 1e-4f);
+  // A chair is taller than wide: its up axis became z.
+  const std::vector<const FurnitureEntry*> chairs = catalog->Named({"Chair"});
+  ASSERT_FALSE(chairs.empty());
+  TriangleMesh chair;
+  ASSERT_TRUE(catalog->LoadMesh(*chairs[0], &chair, &why)) << why;
+  chair.Bounds(&min, &max);
+  EXPECT_NEAR(max.z() - min.z(), chairs[0]->size_m.z(), 1e-3f);
+
+  // A scene dressed with catalog meshes keeps the procedural objects' places and classes.
+  Scene procedural, dressed;
+  ASSERT_TRUE(MakeScene("office", 2, 3, &procedural, &why)) << why;
+  ASSERT_TRUE(MakeScene("office", 2, 3, &dressed, &why, catalog.get())) << why;
+  ASSERT_EQ(dressed.objects.size(), procedural.objects.size());
+  int replaced = 0;
+  for (std::size_t k = 0; k < dressed.objects.size(); ++k) {
+    EXPECT_EQ(dressed.objects[k].class_id, procedural.objects[k].class_id);
+    EXPECT_TRUE(dressed.objects[k].T_W_O.isApprox(procedural.objects[k].T_W_O));
+    replaced += dressed.objects[k].mesh.triangles.size() != procedural.objects[k].mesh.triangles.size();
+  }
+  EXPECT_GE(replaced, 8);  // all but the keyboard and the mouse, where a mesh loads
 }
 
 TEST(SimSequence, AWrittenSequenceReadsBackWithItsGroundTruthAndDetections) {
