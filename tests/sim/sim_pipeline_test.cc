@@ -38,7 +38,7 @@ TEST(SimPipeline, DriftingDeskMapsScoresAndRegeneratesWithCorrectedPoses) {
   const std::string scene = (dir / "desk").string();
   const std::string cli = OBJMAP_CLI_PATH;
   Result run = RunCommand(std::string(OBJMAP_SIM_PATH) + " --out " + scene +
-                   " --kind desk --seed 4 --frames 12 --drift");
+                   " --kind desk --seed 4 --frames 12 --drift --procedural");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   ASSERT_TRUE(fs::exists(dir / "desk" / "corrected_poses.txt"));
 
