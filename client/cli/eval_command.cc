@@ -82,16 +82,22 @@ void PrintTable(const std::map<int, ClassCounts>& per_class, const ClassCounts& 
                 c.mapped, c.true_positives, c.false_positives, c.misses, c.duplicates, c.merges,
                 c.wrong_labels, c.Precision(), c.Recall());
   };
-  for (const auto& [class_id, counts] : per_class) row(std::string(CocoClassName(class_id)), counts);
+  for (const auto& [class_id, counts] : per_class)
+    row(std::string(CocoClassName(class_id)), counts);
   row("all", totals);
 }
 
 nlohmann::ordered_json CountsJson(const ClassCounts& c) {
-  return {{"real", c.real},           {"mapped", c.mapped},
-          {"tp", c.true_positives},   {"fp", c.false_positives},
-          {"fn", c.misses},           {"duplicates", c.duplicates},
-          {"merges", c.merges},       {"wrong_labels", c.wrong_labels},
-          {"precision", c.Precision()}, {"recall", c.Recall()}};
+  return {{"real", c.real},
+          {"mapped", c.mapped},
+          {"tp", c.true_positives},
+          {"fp", c.false_positives},
+          {"fn", c.misses},
+          {"duplicates", c.duplicates},
+          {"merges", c.merges},
+          {"wrong_labels", c.wrong_labels},
+          {"precision", c.Precision()},
+          {"recall", c.Recall()}};
 }
 
 nlohmann::ordered_json ScoresJson(const std::map<int, ClassCounts>& per_class,

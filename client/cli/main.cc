@@ -25,7 +25,7 @@ void PrintUsage() {
          "  objmap free X0 Y0 Z0 X1 Y1 Z1                exit code 0 when free, 3 when not\n"
          "  objmap export --octomap f.bt --objects dir/  OctoMap and object models as files\n"
          "  objmap update-poses <poses.txt> [--wait]     corrected keyframe poses\n"
-         "  objmap keyframes [--out poses.txt]           keyframe poses, as update-poses reads them\n"
+         "  objmap keyframes [--out poses.txt]           keyframe poses (update-poses format)\n"
          "  objmap status                                map version, counts, queue\n"
 #endif
          "run `objmap <command> --help` for the options of a command\n";

@@ -42,8 +42,8 @@ double Ms(Clock::time_point start) {
 double Percentile(std::vector<double> values, double p) {
   if (values.empty()) return 0.0;
   std::sort(values.begin(), values.end());
-  const std::size_t index = std::min(values.size() - 1,
-                                     static_cast<std::size_t>(p * (values.size() - 1) + 0.5));
+  const std::size_t index =
+      std::min(values.size() - 1, static_cast<std::size_t>(p * (values.size() - 1) + 0.5));
   return values[index];
 }
 
@@ -57,8 +57,8 @@ v1::Box MakeBox(const Eigen::Vector3d& min_W, const Eigen::Vector3d& max_W) {
 // The query kinds measured, each one RPC.
 enum Query { kClass, kObjectRegion, kIsFree, kOccupancyCounts, kNumQueries };
 const char* const kQueryNames[kNumQueries] = {
-    "QueryObjects by class (cup)", "QueryObjects by region (1 m box)",
-    "IsFree (20 cm box)", "QueryOccupancy counts (1 m box, 1 cm)"};
+    "QueryObjects by class (cup)", "QueryObjects by region (1 m box)", "IsFree (20 cm box)",
+    "QueryOccupancy counts (1 m box, 1 cm)"};
 
 struct Latencies {
   std::mutex mutex;
@@ -69,10 +69,10 @@ class QueryLoad {
  public:
   QueryLoad(MapClient* client, const Eigen::Vector3d& centre) : client_(client) {
     class_.set_class_name("cup");
-    *region_.mutable_region() = MakeBox(centre - Eigen::Vector3d::Constant(0.5),
-                                        centre + Eigen::Vector3d::Constant(0.5));
-    *is_free_.mutable_region() = MakeBox(centre - Eigen::Vector3d::Constant(0.1),
-                                         centre + Eigen::Vector3d::Constant(0.1));
+    *region_.mutable_region() =
+        MakeBox(centre - Eigen::Vector3d::Constant(0.5), centre + Eigen::Vector3d::Constant(0.5));
+    *is_free_.mutable_region() =
+        MakeBox(centre - Eigen::Vector3d::Constant(0.1), centre + Eigen::Vector3d::Constant(0.1));
     *occupancy_.mutable_region() = region_.region();
   }
 
@@ -144,7 +144,8 @@ int main(int argc, char** argv) {
   const int num_keyframes = static_cast<int>(frames.size());
 
   // The server in this process: MapServer on a fresh SQLite file behind gRPC on loopback.
-  const fs::path db = fs::temp_directory_path() / ("objmap_server_bench_" + std::to_string(getpid()) + ".db");
+  const fs::path db =
+      fs::temp_directory_path() / ("objmap_server_bench_" + std::to_string(getpid()) + ".db");
   CenterNetConfig detector_config;
   detector_config.model_path = OBJMAP_DEFAULT_MODEL_PATH;
   std::unique_ptr<Detector> detector;
@@ -264,7 +265,8 @@ int main(int argc, char** argv) {
   regenerate_all();
 
   // Bytes per keyframe, read through a second connection to the same file.
-  std::unique_ptr<KeyframeStore> store = KeyframeStore::Open(db.string(), KeyframeStoreConfig{}, &why);
+  std::unique_ptr<KeyframeStore> store =
+      KeyframeStore::Open(db.string(), KeyframeStoreConfig{}, &why);
   KeyframeStore::KeyframeBytes sum;
   for (KeyframeId id = 1; id <= num_keyframes && store; ++id) {
     const KeyframeStore::KeyframeBytes bytes = store->BytesOf(id);
@@ -277,21 +279,24 @@ int main(int argc, char** argv) {
   PrintLatencies("Queries while the second half is ingested (one query client):", &loaded);
   if (failed > 0) std::printf("FAILED queries during ingest: %d\n", failed.load());
   const std::vector<double> loaded_acks(ack_ms.begin() + acks_before, ack_ms.end());
-  std::printf("\nAddKeyframe acknowledgement (detector, mapping, store commit): p50 %.0f ms, "
-              "p99 %.0f ms over %zu keyframes\n",
-              Percentile(ack_ms, 0.5), Percentile(ack_ms, 0.99), ack_ms.size());
-  std::printf("\nRegeneration after a pose update of every keyframe\n"
-              "| keyframes | regeneration ms | ms per keyframe |\n|---|---|---|\n");
+  std::printf(
+      "\nAddKeyframe acknowledgement (detector, mapping, store commit): p50 %.0f ms, "
+      "p99 %.0f ms over %zu keyframes\n",
+      Percentile(ack_ms, 0.5), Percentile(ack_ms, 0.99), ack_ms.size());
+  std::printf(
+      "\nRegeneration after a pose update of every keyframe\n"
+      "| keyframes | regeneration ms | ms per keyframe |\n|---|---|---|\n");
   for (const RegenerationPoint& point : regenerations) {
     std::printf("| %d | %.0f | %.0f |\n", point.keyframes, point.ms, point.ms / point.keyframes);
   }
   const double n = std::max(1, num_keyframes);
-  std::printf("\nStored per keyframe (mean of %d): depth PNG %.0f kB, object mask PNG %.0f kB, "
-              "colour JPEG %.0f kB, observations %.0f kB, total %.0f kB; database file %.1f MB "
-              "(%.0f kB per keyframe)\n",
-              num_keyframes, sum.depth / n / 1e3, sum.mask / n / 1e3, sum.color / n / 1e3,
-              sum.observations / n / 1e3, sum.total / n / 1e3, status.database_bytes / 1e6,
-              status.database_bytes / n / 1e3);
+  std::printf(
+      "\nStored per keyframe (mean of %d): depth PNG %.0f kB, object mask PNG %.0f kB, "
+      "colour JPEG %.0f kB, observations %.0f kB, total %.0f kB; database file %.1f MB "
+      "(%.0f kB per keyframe)\n",
+      num_keyframes, sum.depth / n / 1e3, sum.mask / n / 1e3, sum.color / n / 1e3,
+      sum.observations / n / 1e3, sum.total / n / 1e3, status.database_bytes / 1e6,
+      status.database_bytes / n / 1e3);
   std::error_code ignored;
   const auto wal_bytes = fs::file_size(db.string() + "-wal", ignored);
   std::printf("of which the WAL %.1f MB; OctoMap checkpoint of version %llu saved in %.0f ms\n",
@@ -338,15 +343,16 @@ int main(int argc, char** argv) {
   };
   const ServerStatus with_checkpoint = restart(db, 20);
   const ServerStatus without = restart(baseline_db, 0);
-  std::printf("\nRestart (open the file, decode keyframes, rebuild objects and the OctoMap), %d "
-              "keyframes:\n| | startup ms | keyframes integrated |\n|---|---|---|\n"
-              "| baseline: every keyframe integrated again | %.0f | %d |\n"
-              "| OctoMap checkpoint (%.1f MB) | %.0f | %d |\n"
-              "| **ratio** | **%.1fx** | |\n",
-              num_keyframes, without.startup_ms, without.startup_keyframes_integrated,
-              checkpoint_bytes / 1e6, with_checkpoint.startup_ms,
-              with_checkpoint.startup_keyframes_integrated,
-              without.startup_ms / std::max(1.0, with_checkpoint.startup_ms));
+  std::printf(
+      "\nRestart (open the file, decode keyframes, rebuild objects and the OctoMap), %d "
+      "keyframes:\n| | startup ms | keyframes integrated |\n|---|---|---|\n"
+      "| baseline: every keyframe integrated again | %.0f | %d |\n"
+      "| OctoMap checkpoint (%.1f MB) | %.0f | %d |\n"
+      "| **ratio** | **%.1fx** | |\n",
+      num_keyframes, without.startup_ms, without.startup_keyframes_integrated,
+      checkpoint_bytes / 1e6, with_checkpoint.startup_ms,
+      with_checkpoint.startup_keyframes_integrated,
+      without.startup_ms / std::max(1.0, with_checkpoint.startup_ms));
   for (const fs::path& file : {db, baseline_db}) {
     for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(file.string() + suffix);
   }

@@ -17,7 +17,8 @@ using testing::RunObjmap;
 
 class EvalCommand : public ::testing::Test {
  protected:
-  EvalCommand() : dir_(fs::temp_directory_path() / ("objmap_eval_cli_" + std::to_string(getpid()))) {
+  EvalCommand()
+      : dir_(fs::temp_directory_path() / ("objmap_eval_cli_" + std::to_string(getpid()))) {
     fs::remove_all(dir_);
     fs::create_directories(dir_ / "map" / "objects");
     // Two cups in the map: one where the real cup is, one where nothing is; the real chair is

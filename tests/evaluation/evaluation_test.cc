@@ -66,7 +66,7 @@ TEST(EvaluateObjects, CountsDuplicatesMergesMissesAndWrongLabels) {
   EXPECT_EQ(cups.mapped, 3);
   EXPECT_EQ(cups.true_positives, 1);
   EXPECT_EQ(cups.duplicates, 1);
-  EXPECT_EQ(cups.misses, 1);          // the second cup
+  EXPECT_EQ(cups.misses, 1);           // the second cup
   EXPECT_EQ(cups.false_positives, 1);  // the cup at (10, 10, 10)
 
   const ClassCounts& tvs = Counts(evaluation, "tv");
@@ -130,9 +130,8 @@ TEST(EvaluateObjects, ModelAccuracyIsTheMeanDistanceToTheSurface) {
 }
 
 TEST(ScoreCounts, CountsInsideTheRangeAreRightAndTheRestMissesOrFalsePositives) {
-  const std::map<int, CountRange> expected = {{CocoClassId("chair"), {4, 6}},
-                                              {CocoClassId("tv"), {2, 2}},
-                                              {CocoClassId("sink"), {1, 1}}};
+  const std::map<int, CountRange> expected = {
+      {CocoClassId("chair"), {4, 6}}, {CocoClassId("tv"), {2, 2}}, {CocoClassId("sink"), {1, 1}}};
   const std::map<int, int> found = {{CocoClassId("chair"), 3},
                                     {CocoClassId("tv"), 2},
                                     {CocoClassId("sink"), 2},
@@ -152,10 +151,9 @@ TEST(ScoreCounts, CountsInsideTheRangeAreRightAndTheRestMissesOrFalsePositives) 
 class EvaluationFiles : public ::testing::Test {
  protected:
   EvaluationFiles()
-      : dir_(fs::temp_directory_path() / ("objmap_evaluation_" + std::to_string(getpid()) + "_" +
-                                          ::testing::UnitTest::GetInstance()
-                                              ->current_test_info()
-                                              ->name())) {
+      : dir_(fs::temp_directory_path() /
+             ("objmap_evaluation_" + std::to_string(getpid()) + "_" +
+              ::testing::UnitTest::GetInstance()->current_test_info()->name())) {
     fs::remove_all(dir_);
     fs::create_directories(dir_ / "objects");
   }
@@ -168,8 +166,7 @@ class EvaluationFiles : public ::testing::Test {
 };
 
 TEST_F(EvaluationFiles, GroundTruthIsReadAndBadEntriesAreNamed) {
-  const std::string path = Write(
-      "gt.json", R"({"objects": [{"id": 4, "class": "cup",
+  const std::string path = Write("gt.json", R"({"objects": [{"id": 4, "class": "cup",
         "pose": [1,0,0,0.5, 0,1,0,0, 0,0,1,0.7, 0,0,0,1], "size": [0.08, 0.08, 0.1],
         "surface_sample": [[0.5, 0, 0.75], [0.46, 0, 0.7]]}]})");
   std::vector<GroundTruthObject> objects;
@@ -181,18 +178,15 @@ TEST_F(EvaluationFiles, GroundTruthIsReadAndBadEntriesAreNamed) {
   EXPECT_DOUBLE_EQ(objects[0].T_W_B.translation().z(), 0.7);
   EXPECT_EQ(objects[0].surface_W.size(), 2u);
 
-  const std::string mug = Write(
-      "mug.json", R"({"objects": [{"id": 1, "class": "mug",
+  const std::string mug = Write("mug.json", R"({"objects": [{"id": 1, "class": "mug",
         "pose": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1], "size": [1, 1, 1]}]})");
   EXPECT_FALSE(ReadGroundTruth(mug, &objects, &why));
   EXPECT_NE(why.find("objects[0]: class 'mug' is not a COCO class"), std::string::npos) << why;
-  const std::string sheared = Write(
-      "sheared.json", R"({"objects": [{"id": 1, "class": "cup",
+  const std::string sheared = Write("sheared.json", R"({"objects": [{"id": 1, "class": "cup",
         "pose": [2,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1], "size": [1, 1, 1]}]})");
   EXPECT_FALSE(ReadGroundTruth(sheared, &objects, &why));
   EXPECT_NE(why.find("objects[0]: pose: "), std::string::npos) << why;
-  const std::string no_size = Write(
-      "no_size.json", R"({"objects": [{"id": 1, "class": "cup",
+  const std::string no_size = Write("no_size.json", R"({"objects": [{"id": 1, "class": "cup",
         "pose": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]}]})");
   EXPECT_FALSE(ReadGroundTruth(no_size, &objects, &why));
   EXPECT_NE(why.find("\"size\""), std::string::npos) << why;

@@ -20,9 +20,9 @@
 #include <thread>
 #include <unordered_set>
 
+#include "cli/run_objmap.h"
 #include "dataset/keyframe_selector.h"
 #include "dataset/sequence_reader.h"
-#include "cli/run_objmap.h"
 #include "integration/server_process.h"
 #include "objmap/client.h"
 #include "objmap/conversions.h"
@@ -125,9 +125,8 @@ class VoxelSet {
         for (int dz = -1; dz <= 1; ++dz) {
           const Eigen::Vector3i n = cell + Eigen::Vector3i(dx, dy, dz);
           if (cells_.count(Key(n)) == 0) continue;
-          best = std::min(best, (p - (n.cast<double>() + Eigen::Vector3d::Constant(0.5)) *
-                                        resolution_)
-                                    .norm());
+          best = std::min(
+              best, (p - (n.cast<double>() + Eigen::Vector3d::Constant(0.5)) * resolution_).norm());
         }
       }
     }
@@ -177,8 +176,8 @@ class ServerIntegration : public ::testing::Test {
       return;
     }
     if (!testing::Exists(kModelPath)) {
-      s.skip_reason = "SKIPPED: needs the detector model " + kModelPath +
-                      " (bash scripts/fetch_model.sh)";
+      s.skip_reason =
+          "SKIPPED: needs the detector model " + kModelPath + " (bash scripts/fetch_model.sh)";
       return;
     }
     s.dir = fs::temp_directory_path() / ("objmap_integration_" + std::to_string(getpid()));
@@ -203,7 +202,8 @@ class ServerIntegration : public ::testing::Test {
       v1::AddKeyframeResponse response;
       grpc::Status status = s.client->AddKeyframe(s.keyframes[i], &response);
       if (status.ok() && response.keyframe_id() != i + 1) {
-        status = {grpc::StatusCode::INTERNAL, "keyframe id " + std::to_string(response.keyframe_id())};
+        status = {grpc::StatusCode::INTERNAL,
+                  "keyframe id " + std::to_string(response.keyframe_id())};
       }
       InventoryIds inventory;
       if (status.ok()) status = ReadInventory(s.client.get(), &inventory);
@@ -224,8 +224,8 @@ class ServerIntegration : public ::testing::Test {
       }
     }
     s.ingest_s = std::chrono::duration<double>(Clock::now() - start).count();
-    std::cout << "ingested " << kKeyframes << " keyframes in " << s.ingest_s << " s; inventory: "
-              << Describe(s.inventory_after.back()) << std::endl;
+    std::cout << "ingested " << kKeyframes << " keyframes in " << s.ingest_s
+              << " s; inventory: " << Describe(s.inventory_after.back()) << std::endl;
   }
 
   static void TearDownTestSuite() {
@@ -253,9 +253,8 @@ class ServerIntegration : public ::testing::Test {
     KeyframeSelector selector{KeyframeSelectorConfig{}};
     KeyframeEncoding encoding;
     encoding.color = KeyframeEncoding::Color::kJpeg;
-    for (std::size_t index = 0; index < reader->size() &&
-                                static_cast<int>(s.keyframes.size()) < kKeyframes;
-         ++index) {
+    for (std::size_t index = 0;
+         index < reader->size() && static_cast<int>(s.keyframes.size()) < kKeyframes; ++index) {
       RgbdFrame frame;
       if (!reader->ReadFrame(index, &frame, why)) return false;
       if (!selector.IsKeyframe(frame.T_W_C)) continue;
@@ -372,8 +371,8 @@ TEST_F(ServerIntegration, ObjectsByClassRegionAndNearest) {
   EXPECT_EQ(region_ids.count(table.id()), 1u);
   for (const v1::Object& cup : cups) EXPECT_EQ(region_ids.count(cup.id()), 1u) << cup.id();
   // A box of the same size 20 m away holds nothing.
-  *region.mutable_region() = MakeBox(table_min + Eigen::Vector3d(20, 0, 0),
-                                     table_max + Eigen::Vector3d(20, 0, 0));
+  *region.mutable_region() =
+      MakeBox(table_min + Eigen::Vector3d(20, 0, 0), table_max + Eigen::Vector3d(20, 0, 0));
   ASSERT_TRUE(client().QueryObjects(region, &in_region).ok());
   EXPECT_EQ(in_region.objects_size(), 0);
 
@@ -571,8 +570,8 @@ TEST_F(ServerIntegration, KilledDuringIngestKeepsEveryAcknowledgedKeyframeAndThe
   std::cout << "killed after " << acked << " acknowledged keyframes; " << stored
             << " stored; inventory " << Describe(inventory) << "; restart took "
             << status.startup_ms() << " ms, " << status.startup_keyframes_integrated()
-            << " keyframes integrated (checkpoint of version " << status.checkpoint_version()
-            << ")" << std::endl;
+            << " keyframes integrated (checkpoint of version " << status.checkpoint_version() << ")"
+            << std::endl;
   EXPECT_EQ(server->Kill(SIGTERM), 0) << server->Log();
 }
 
@@ -613,14 +612,15 @@ TEST_F(ServerIntegration, CliInventoryFreeAndExportAgreeWithTheApi) {
 
   // export: the .bt is the server's OctoMap, and one PLY per confirmed object.
   const fs::path out = shared().dir / "export";
-  const testing::CommandResult exported = testing::RunObjmap(
-      "export --octomap " + (out / "map.bt").string() + " --objects " + (out / "objects").string() +
-      server);
+  const testing::CommandResult exported =
+      testing::RunObjmap("export --octomap " + (out / "map.bt").string() + " --objects " +
+                         (out / "objects").string() + server);
   ASSERT_EQ(exported.exit_code, 0) << exported.output;
   v1::GetOctomapResponse octomap;
   ASSERT_TRUE(client().GetOctomap(v1::GetOctomapRequest(), &octomap).ok());
   std::ifstream file(out / "map.bt", std::ios::binary);
-  const std::string written((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  const std::string written((std::istreambuf_iterator<char>(file)),
+                            std::istreambuf_iterator<char>());
   EXPECT_TRUE(written == octomap.bt()) << "map.bt differs from GetOctomap";
   std::size_t plys = 0;
   for (const auto& entry : fs::directory_iterator(out / "objects")) {
@@ -632,12 +632,13 @@ TEST_F(ServerIntegration, CliInventoryFreeAndExportAgreeWithTheApi) {
   EXPECT_TRUE(fs::exists(out / "objects" / "objects.json"));
 
   // eval, on the server and on the exported folder: the same objects, the same scores.
-  const std::string counts = std::string(OBJMAP_SOURCE_DIR) + "/tests/eval/redkitchen_inventory.json";
-  const testing::CommandResult on_server =
-      testing::RunObjmap("eval " + shared().server->address() + " --inventory " + counts + " --json");
+  const std::string counts =
+      std::string(OBJMAP_SOURCE_DIR) + "/tests/eval/redkitchen_inventory.json";
+  const testing::CommandResult on_server = testing::RunObjmap("eval " + shared().server->address() +
+                                                              " --inventory " + counts + " --json");
   ASSERT_EQ(on_server.exit_code, 0) << on_server.output;
-  const testing::CommandResult on_folder =
-      testing::RunObjmap("eval " + (out / "objects").string() + " --inventory " + counts + " --json");
+  const testing::CommandResult on_folder = testing::RunObjmap("eval " + (out / "objects").string() +
+                                                              " --inventory " + counts + " --json");
   ASSERT_EQ(on_folder.exit_code, 0) << on_folder.output;
   EXPECT_EQ(on_server.output, on_folder.output);
   EXPECT_NE(on_server.output.find("\"mapped\": " + std::to_string(confirmed)), std::string::npos)
@@ -708,12 +709,12 @@ TEST_F(ServerIntegration, RigidPoseUpdateMovesObjectsAndOccupancyWhileQueriesAns
     v1::QueryObjectsRequest cups;
     cups.set_class_name("cup");
     v1::IsFreeRequest is_free;
-    *is_free.mutable_region() = MakeBox(Eigen::Vector3d::Constant(-0.05),
-                                        Eigen::Vector3d::Constant(0.05));
+    *is_free.mutable_region() =
+        MakeBox(Eigen::Vector3d::Constant(-0.05), Eigen::Vector3d::Constant(0.05));
     while (!stop) {
       v1::StatusResponse status;
-      const bool regenerating = client().Status(v1::StatusRequest(), &status).ok() &&
-                                status.regenerating();
+      const bool regenerating =
+          client().Status(v1::StatusRequest(), &status).ok() && status.regenerating();
       const auto start = Clock::now();
       v1::QueryObjectsResponse objects;
       v1::IsFreeResponse free;
@@ -760,7 +761,8 @@ TEST_F(ServerIntegration, RigidPoseUpdateMovesObjectsAndOccupancyWhileQueriesAns
   // Every object kept its id and moved with the poses.
   const std::vector<v1::Object> after = Objects("", false, true);
   std::map<std::int64_t, Eigen::Vector3d> centroid_after;
-  for (const v1::Object& object : after) centroid_after[object.id()] = Vec3FromProto(object.centroid());
+  for (const v1::Object& object : after)
+    centroid_after[object.id()] = Vec3FromProto(object.centroid());
   EXPECT_EQ(after.size(), before.size());
   double worst_centroid_m = 0.0;
   for (const v1::Object& object : before) {

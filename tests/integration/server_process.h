@@ -62,8 +62,8 @@ class ServerProcess {
     }
     std::string line;
     if (!ReadLine(timeout, &line)) {
-      *why = "objmap_server printed no listening line within " +
-             std::to_string(timeout.count()) + " s; its log:\n" + Log();
+      *why = "objmap_server printed no listening line within " + std::to_string(timeout.count()) +
+             " s; its log:\n" + Log();
       Kill(SIGKILL);
       return false;
     }

@@ -35,8 +35,9 @@ class ZipArchive {
       return false;
     }
     bytes->resize(info.uncompressed_size);
-    const int read =
-        bytes->empty() ? 0 : unzReadCurrentFile(file_, bytes->data(), static_cast<unsigned>(bytes->size()));
+    const int read = bytes->empty() ? 0
+                                    : unzReadCurrentFile(file_, bytes->data(),
+                                                         static_cast<unsigned>(bytes->size()));
     unzCloseCurrentFile(file_);
     return read == static_cast<int>(bytes->size());
   }
@@ -100,9 +101,8 @@ std::map<std::string, Material> ParseMaterials(const std::string& text, const st
       file = Trim(file);
       std::string bytes;
       if (zip->Read(folder + file, &bytes)) {
-        current->texture =
-            cv::imdecode(cv::Mat(1, static_cast<int>(bytes.size()), CV_8UC1, bytes.data()),
-                         cv::IMREAD_COLOR);
+        current->texture = cv::imdecode(
+            cv::Mat(1, static_cast<int>(bytes.size()), CV_8UC1, bytes.data()), cv::IMREAD_COLOR);
       }
     }
   }
@@ -114,14 +114,16 @@ Rgb ColorOf(const Material& material, const Eigen::Vector2f& uv) {
   if (!material.texture.empty()) {
     // Textures repeat; v runs upwards in OBJ.
     const float u = uv.x() - std::floor(uv.x()), v = uv.y() - std::floor(uv.y());
-    const int x = std::clamp(static_cast<int>(u * material.texture.cols), 0, material.texture.cols - 1);
+    const int x =
+        std::clamp(static_cast<int>(u * material.texture.cols), 0, material.texture.cols - 1);
     const int y = std::clamp(static_cast<int>((1.f - v) * material.texture.rows), 0,
                              material.texture.rows - 1);
     const cv::Vec3b bgr = material.texture.at<cv::Vec3b>(y, x);
     rgb = Eigen::Vector3f(bgr[2], bgr[1], bgr[0]) / 255.f;
   }
   Rgb out;
-  for (int c = 0; c < 3; ++c) out[c] = static_cast<std::uint8_t>(std::clamp(rgb[c] * 255.f, 0.f, 255.f));
+  for (int c = 0; c < 3; ++c)
+    out[c] = static_cast<std::uint8_t>(std::clamp(rgb[c] * 255.f, 0.f, 255.f));
   return out;
 }
 
@@ -170,7 +172,8 @@ std::unique_ptr<FurnitureCatalog> FurnitureCatalog::Open(const std::string& fold
       std::istringstream rotation(get("modelRotation"));
       Eigen::Matrix3f R;
       bool rotation_ok = true;
-      for (int i = 0; i < 9; ++i) rotation_ok = rotation_ok && static_cast<bool>(rotation >> R(i / 3, i % 3));
+      for (int i = 0; i < 9; ++i)
+        rotation_ok = rotation_ok && static_cast<bool>(rotation >> R(i / 3, i % 3));
       if (rotation_ok) entry.model_rotation = R;
       if (!entry.model.empty() && (entry.size_m.array() > 0.f).all()) {
         catalog->entries_.push_back(std::move(entry));
@@ -178,8 +181,7 @@ std::unique_ptr<FurnitureCatalog> FurnitureCatalog::Open(const std::string& fold
     }
   }
   if (catalog->entries_.empty()) {
-    *why = "no furniture catalog (.sh3f) in " + folder +
-           " (Debian package sweethome3d-furniture)";
+    *why = "no furniture catalog (.sh3f) in " + folder + " (Debian package sweethome3d-furniture)";
     return nullptr;
   }
   return catalog;
@@ -252,8 +254,8 @@ bool FurnitureCatalog::LoadMesh(const FurnitureEntry& entry, TriangleMesh* mesh,
           if (t >= 0) uv_sum += uvs[t], ++uv_count;
         }
       }
-      const Rgb color =
-          ColorOf(*material, uv_count > 0 ? Eigen::Vector2f(uv_sum / uv_count) : Eigen::Vector2f::Zero());
+      const Rgb color = ColorOf(
+          *material, uv_count > 0 ? Eigen::Vector2f(uv_sum / uv_count) : Eigen::Vector2f::Zero());
       for (std::size_t k = 1; k + 1 < corners.size(); ++k) {
         mesh->triangles.emplace_back(corners[0], corners[k], corners[k + 1]);
         mesh->colors.push_back(color);

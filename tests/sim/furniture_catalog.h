@@ -17,7 +17,7 @@ struct FurnitureEntry {
   std::string archive;  ///< the .sh3f file
   std::string name;     ///< "Coffee cup"
   std::string category;
-  std::string model;    ///< path of the OBJ inside the archive
+  std::string model;  ///< path of the OBJ inside the archive
   std::string creator;
   Eigen::Vector3f size_m = Eigen::Vector3f::Zero();  ///< width, depth, height
   Eigen::Matrix3f model_rotation = Eigen::Matrix3f::Identity();

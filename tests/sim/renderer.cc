@@ -13,7 +13,7 @@ constexpr float kNearM = 0.05f;
 
 struct Buffers {
   int width = 0, height = 0;
-  std::vector<float> z;               // camera-frame depth, +inf where empty
+  std::vector<float> z;  // camera-frame depth, +inf where empty
   std::vector<std::uint16_t> id;
   std::vector<Rgb> color;
   std::vector<Eigen::Vector3f> normal;  // camera frame, unit, towards the camera
@@ -93,14 +93,14 @@ void DrawMesh(const TriangleMesh& mesh, const Eigen::Isometry3f& T_C_M, std::uin
 
 bool DepthNoiseConfig::IsValid(std::string* why) const {
   if (!(axial_a_m >= 0.0) || !(axial_b_per_m >= 0.0) || !(baseline_m > 0.0) ||
-      disparity_subpixels < 0 ||
-      !(min_depth_m >= 0.0) || !(max_depth_m > min_depth_m) ||
+      disparity_subpixels < 0 || !(min_depth_m >= 0.0) || !(max_depth_m > min_depth_m) ||
       !(max_incidence_deg > 0.0 && max_incidence_deg <= 90.0) || !(edge_jump_fraction > 0.0) ||
       !(edge_dropout_probability >= 0.0 && edge_dropout_probability <= 1.0)) {
-    *why = "DepthNoiseConfig: noise terms >= 0, baseline_m > 0, disparity_subpixels >= 0, "
-           "0 <= min_depth_m < max_depth_m, "
-           "max_incidence_deg in (0, 90], edge_jump_fraction > 0, edge_dropout_probability in "
-           "[0, 1] are required";
+    *why =
+        "DepthNoiseConfig: noise terms >= 0, baseline_m > 0, disparity_subpixels >= 0, "
+        "0 <= min_depth_m < max_depth_m, "
+        "max_incidence_deg in (0, 90], edge_jump_fraction > 0, edge_dropout_probability in "
+        "[0, 1] are required";
     return false;
   }
   return true;
@@ -137,9 +137,9 @@ RenderedFrame Render(const Scene& scene, const Eigen::Isometry3d& T_W_C,
       const std::size_t i = static_cast<std::size_t>(v) * K.width + u;
       if (!std::isfinite(b.z[i])) continue;
       const float z = b.z[i];
-      const Eigen::Vector3f ray =
-          Eigen::Vector3f(static_cast<float>((u - K.cx) / K.fx), static_cast<float>((v - K.cy) / K.fy), 1.f)
-              .normalized();
+      const Eigen::Vector3f ray = Eigen::Vector3f(static_cast<float>((u - K.cx) / K.fx),
+                                                  static_cast<float>((v - K.cy) / K.fy), 1.f)
+                                      .normalized();
       const double incidence = std::abs(static_cast<double>(b.normal[i].dot(ray)));
       // Headlight shading: surfaces facing the camera are brightest.
       const double light = 0.35 + 0.65 * incidence;
@@ -158,11 +158,12 @@ RenderedFrame Render(const Scene& scene, const Eigen::Isometry3d& T_W_C,
         const int nu = u + du, nv = v + dv;
         if (nu < 0 || nv < 0 || nu >= K.width || nv >= K.height) continue;
         const float other = b.z[static_cast<std::size_t>(nv) * K.width + nu];
-        if (!std::isfinite(other) || std::abs(other - z) > noise.edge_jump_fraction * z) edge = true;
+        if (!std::isfinite(other) || std::abs(other - z) > noise.edge_jump_fraction * z)
+          edge = true;
       }
       if (edge && random.Uniform() < noise.edge_dropout_probability) continue;
-      const double sigma = noise.axial_a_m + noise.axial_b_per_m * (z - noise.axial_z0_m) *
-                                                 (z - noise.axial_z0_m);
+      const double sigma =
+          noise.axial_a_m + noise.axial_b_per_m * (z - noise.axial_z0_m) * (z - noise.axial_z0_m);
       double measured = z + sigma * random.Normal();
       if (noise.disparity_subpixels > 0) {
         const double fb = K.fx * noise.baseline_m;

@@ -39,8 +39,8 @@ struct DepthNoiseConfig {
 
 struct RenderedFrame {
   ColorImage color;
-  DepthImage depth;             ///< metres, noisy, 0 where invalid
-  std::vector<float> true_depth_m;  ///< before noise, 0 where nothing is hit
+  DepthImage depth;                     ///< metres, noisy, 0 where invalid
+  std::vector<float> true_depth_m;      ///< before noise, 0 where nothing is hit
   std::vector<std::uint16_t> instance;  ///< SceneObject::id per pixel, 0 for the structure
 };
 

@@ -7,6 +7,7 @@
 
 #include "sim/furniture_catalog.h"
 #include "sim/sim_random.h"
+#include "test_scenes.h"
 #include "types/coco_classes.h"
 
 namespace objmap::sim {
@@ -24,7 +25,8 @@ Eigen::Isometry3f Pose(const Eigen::Vector3f& t, float yaw = 0.f) {
 Rgb Jitter(const Rgb& color, Random* random) {
   Rgb out;
   for (int c = 0; c < 3; ++c) {
-    out[c] = static_cast<std::uint8_t>(std::clamp(color[c] + random->Uniform(-20.0, 20.0), 0.0, 255.0));
+    out[c] =
+        static_cast<std::uint8_t>(std::clamp(color[c] + random->Uniform(-20.0, 20.0), 0.0, 255.0));
   }
   return out;
 }
@@ -64,7 +66,7 @@ TriangleMesh Chair(const Rgb& color) {
 // A flat screen on a stand; the screen faces -y.
 TriangleMesh Monitor(float width, float height, const Rgb& frame, const Rgb& screen) {
   TriangleMesh mesh;
-  mesh.AddBox({-0.12f, -0.1f, 0.f}, {0.12f, 0.1f, 0.015f}, frame);   // foot
+  mesh.AddBox({-0.12f, -0.1f, 0.f}, {0.12f, 0.1f, 0.015f}, frame);       // foot
   mesh.AddBox({-0.025f, 0.02f, 0.015f}, {0.025f, 0.05f, 0.12f}, frame);  // neck
   mesh.AddBox({-width / 2, -0.01f, 0.1f}, {width / 2, 0.03f, 0.1f + height}, frame);
   mesh.AddBox({-width / 2 + 0.015f, -0.012f, 0.115f}, {width / 2 - 0.015f, -0.01f, 0.085f + height},
@@ -167,9 +169,10 @@ class SceneBuilder {
     const auto names = CatalogNames().find(class_name);
     if (catalog_ == nullptr || names == CatalogNames().end()) return procedural;
     std::vector<const FurnitureEntry*> candidates = catalog_->Named(names->second);
-    candidates.erase(std::remove_if(candidates.begin(), candidates.end(),
-                                    [](const FurnitureEntry* e) { return e->category == "Exterior"; }),
-                     candidates.end());
+    candidates.erase(
+        std::remove_if(candidates.begin(), candidates.end(),
+                       [](const FurnitureEntry* e) { return e->category == "Exterior"; }),
+        candidates.end());
     if (candidates.empty()) return procedural;
     Random pick(scene_->seed, 0xCA7A106ull, static_cast<std::uint64_t>(id));
     const FurnitureEntry& entry = *candidates[pick.Next() % candidates.size()];
@@ -229,8 +232,8 @@ void AddDesk(SceneBuilder* b, const Eigen::Vector3f& centre, bool two_monitors) 
   // Two cups close together (3 cm apart) at the left end.
   const Eigen::Vector3f cups = top + Eigen::Vector3f(-0.62f, -0.15f, 0.f);
   b->Add("cup", "left cup", Cup(Jitter({230, 230, 225}, &r)), cups, 0.4f);
-  b->Add("cup", "right cup", Cup(Jitter({180, 40, 40}, &r)), cups + Eigen::Vector3f(0.11f, 0.f, 0.f),
-         2.6f);
+  b->Add("cup", "right cup", Cup(Jitter({180, 40, 40}, &r)),
+         cups + Eigen::Vector3f(0.11f, 0.f, 0.f), 2.6f);
   // Three books stacked at the right end.
   float z = 0.f;
   for (int i = 0; i < 3; ++i) {
@@ -284,8 +287,8 @@ Eigen::Vector3d AddKitchen(SceneBuilder* b, TriangleMesh* structure) {
   const float counter_top = 0.9f;
   structure->AddBox({0.9f, 3.85f, 0.f}, {3.7f, 4.45f, counter_top}, Jitter({200, 40, 40}, &r));
   const Rgb steel = Jitter({180, 180, 185}, &r), white = Jitter({235, 235, 230}, &r);
-  b->Add("refrigerator", "refrigerator", Appliance(0.7f, 0.65f, 1.8f, white, Jitter({210, 210, 205}, &r)),
-         {0.5f, 4.1f, 0.f}, 0.f);
+  b->Add("refrigerator", "refrigerator",
+         Appliance(0.7f, 0.65f, 1.8f, white, Jitter({210, 210, 205}, &r)), {0.5f, 4.1f, 0.f}, 0.f);
   b->Add("oven", "oven", Appliance(0.6f, 0.6f, 0.9f, Jitter({60, 60, 60}, &r), {20, 20, 25}),
          {4.05f, 4.1f, 0.f}, 0.f);
   b->Add("sink", "sink", Sink(steel), {1.8f, 4.15f, counter_top}, 0.f);
@@ -297,10 +300,14 @@ Eigen::Vector3d AddKitchen(SceneBuilder* b, TriangleMesh* structure) {
   b->Add("dining table", "kitchen table", Table(1.2f, 0.8f, 0.75f, Jitter({170, 130, 90}, &r)),
          table, 0.f);
   const Eigen::Vector3f top = table + Eigen::Vector3f(0.f, 0.f, 0.75f);
-  b->Add("cup", "left cup", Cup(Jitter({230, 230, 225}, &r)), top + Eigen::Vector3f(-0.2f, 0.f, 0.f), 0.3f);
-  b->Add("cup", "right cup", Cup(Jitter({40, 80, 180}, &r)), top + Eigen::Vector3f(-0.06f, 0.05f, 0.f), 2.8f);
-  b->Add("chair", "chair left", Chair(Jitter({110, 80, 50}, &r)), table + Eigen::Vector3f(-0.3f, -0.65f, 0.f), kPi);
-  b->Add("chair", "chair right", Chair(Jitter({110, 80, 50}, &r)), table + Eigen::Vector3f(0.35f, 0.65f, 0.f), 0.f);
+  b->Add("cup", "left cup", Cup(Jitter({230, 230, 225}, &r)),
+         top + Eigen::Vector3f(-0.2f, 0.f, 0.f), 0.3f);
+  b->Add("cup", "right cup", Cup(Jitter({40, 80, 180}, &r)),
+         top + Eigen::Vector3f(-0.06f, 0.05f, 0.f), 2.8f);
+  b->Add("chair", "chair left", Chair(Jitter({110, 80, 50}, &r)),
+         table + Eigen::Vector3f(-0.3f, -0.65f, 0.f), kPi);
+  b->Add("chair", "chair right", Chair(Jitter({110, 80, 50}, &r)),
+         table + Eigen::Vector3f(0.35f, 0.65f, 0.f), 0.f);
   return Eigen::Vector3d(2.3, 3.2, 0.85);
 }
 
@@ -316,21 +323,31 @@ Eigen::Vector3d AddLab(SceneBuilder* b) {
   const Eigen::Vector3f back_top = back + Eigen::Vector3f(0.f, 0.f, 0.9f);
   const Eigen::Vector3f front_top = front + Eigen::Vector3f(0.f, 0.f, 0.9f);
   // Two laptops side by side on the back bench, a monitor with its keyboard and mouse.
-  b->Add("laptop", "laptop 1", Laptop(Jitter({150, 150, 155}, &r), screen), back_top + Eigen::Vector3f(-0.7f, 0.f, 0.f), 0.1f);
-  b->Add("laptop", "laptop 2", Laptop(Jitter({90, 90, 95}, &r), screen), back_top + Eigen::Vector3f(-0.3f, 0.f, 0.f), -0.1f);
-  b->Add("tv", "monitor", Monitor(0.55f, 0.33f, black, screen), back_top + Eigen::Vector3f(0.45f, 0.15f, 0.f), 0.f);
-  b->Add("keyboard", "keyboard", Keyboard(black, Jitter({70, 70, 75}, &r)), back_top + Eigen::Vector3f(0.42f, -0.18f, 0.f), 0.05f);
+  b->Add("laptop", "laptop 1", Laptop(Jitter({150, 150, 155}, &r), screen),
+         back_top + Eigen::Vector3f(-0.7f, 0.f, 0.f), 0.1f);
+  b->Add("laptop", "laptop 2", Laptop(Jitter({90, 90, 95}, &r), screen),
+         back_top + Eigen::Vector3f(-0.3f, 0.f, 0.f), -0.1f);
+  b->Add("tv", "monitor", Monitor(0.55f, 0.33f, black, screen),
+         back_top + Eigen::Vector3f(0.45f, 0.15f, 0.f), 0.f);
+  b->Add("keyboard", "keyboard", Keyboard(black, Jitter({70, 70, 75}, &r)),
+         back_top + Eigen::Vector3f(0.42f, -0.18f, 0.f), 0.05f);
   b->Add("mouse", "mouse", Mouse(black), back_top + Eigen::Vector3f(0.75f, -0.18f, 0.f), 0.f);
   // Bottles and a stack of two books on the front bench.
   for (int i = 0; i < 3; ++i) {
-    b->Add("bottle", "bottle " + std::to_string(i + 1), Bottle(Jitter({60, static_cast<std::uint8_t>(110 + 30 * i), 160}, &r)),
+    b->Add("bottle", "bottle " + std::to_string(i + 1),
+           Bottle(Jitter({60, static_cast<std::uint8_t>(110 + 30 * i), 160}, &r)),
            front_top + Eigen::Vector3f(-0.5f + 0.12f * i, 0.1f, 0.f), 0.f);
   }
-  b->Add("book", "book 1", Book(0.26f, 0.19f, 0.03f, Jitter({160, 60, 40}, &r)), front_top + Eigen::Vector3f(0.4f, 0.f, 0.f), 0.1f);
-  b->Add("book", "book 2", Book(0.23f, 0.17f, 0.025f, Jitter({40, 60, 160}, &r)), front_top + Eigen::Vector3f(0.4f, 0.f, 0.03f), -0.1f);
-  b->Add("chair", "chair 1", Chair(Jitter({50, 50, 60}, &r)), back + Eigen::Vector3f(-0.5f, -0.6f, 0.f), kPi + 0.2f);
-  b->Add("chair", "chair 2", Chair(Jitter({50, 50, 60}, &r)), back + Eigen::Vector3f(0.45f, -0.65f, 0.f), kPi - 0.3f);
-  b->Add("chair", "chair 3", Chair(Jitter({50, 50, 60}, &r)), front + Eigen::Vector3f(0.2f, -0.6f, 0.f), kPi);
+  b->Add("book", "book 1", Book(0.26f, 0.19f, 0.03f, Jitter({160, 60, 40}, &r)),
+         front_top + Eigen::Vector3f(0.4f, 0.f, 0.f), 0.1f);
+  b->Add("book", "book 2", Book(0.23f, 0.17f, 0.025f, Jitter({40, 60, 160}, &r)),
+         front_top + Eigen::Vector3f(0.4f, 0.f, 0.03f), -0.1f);
+  b->Add("chair", "chair 1", Chair(Jitter({50, 50, 60}, &r)),
+         back + Eigen::Vector3f(-0.5f, -0.6f, 0.f), kPi + 0.2f);
+  b->Add("chair", "chair 2", Chair(Jitter({50, 50, 60}, &r)),
+         back + Eigen::Vector3f(0.45f, -0.65f, 0.f), kPi - 0.3f);
+  b->Add("chair", "chair 3", Chair(Jitter({50, 50, 60}, &r)),
+         front + Eigen::Vector3f(0.2f, -0.6f, 0.f), kPi);
   return Eigen::Vector3d(2.5, 3.0, 0.9);
 }
 
@@ -352,16 +369,7 @@ std::vector<Eigen::Isometry3d> Sweep(const Eigen::Vector3d& target, double radiu
     const Eigen::Vector3d eye =
         target + Eigen::Vector3d(radius * std::sin(angle), -radius * std::cos(angle),
                                  0.65 + 0.15 * std::sin(3.0 * s * M_PI));
-    // Camera axes: z forward (to the target), x right, y down.
-    const Eigen::Vector3d forward = (target - eye).normalized();
-    const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized();
-    const Eigen::Vector3d down = forward.cross(right);
-    Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
-    T_W_C.linear().col(0) = right;
-    T_W_C.linear().col(1) = down;
-    T_W_C.linear().col(2) = forward;
-    T_W_C.translation() = eye;
-    poses.push_back(T_W_C);
+    poses.push_back(testing::LookAt(eye, target));
   }
   return poses;
 }
@@ -493,7 +501,8 @@ bool MakeScene(const std::string& kind, std::uint64_t seed, int frames, Scene* s
     plant.AddCylinder({0.f, 0.f, 0.f}, 0.12f, 0.3f, 12, {150, 80, 50});
     plant.AddCylinder({0.f, 0.f, 0.3f}, 0.22f, 0.5f, 10, {40, 130, 50});
     builder.Add("potted plant", "plant", plant, Eigen::Vector3f(4.4f, 4.0f, 0.f), 0.f);
-    scene->structure.AddBox({0.05f, 3.7f, 0.f}, {1.0f, 4.45f, 1.8f}, Jitter({140, 110, 80}, &random));
+    scene->structure.AddBox({0.05f, 3.7f, 0.f}, {1.0f, 4.45f, 1.8f},
+                            Jitter({140, 110, 80}, &random));
   }
   scene->trajectory = Sweep(Eigen::Vector3d(desk.x(), desk.y(), 0.8), 1.7, frames, &random);
   return true;

@@ -42,7 +42,7 @@ struct TriangleMesh {
 struct SceneObject {
   int id = 0;  ///< instance id (1..), as in the rendered instance images
   int class_id = -1;
-  std::string name;  ///< what it is ("left monitor"), for people reading ground_truth.json
+  std::string name;   ///< what it is ("left monitor"), for people reading ground_truth.json
   TriangleMesh mesh;  ///< object frame
   Eigen::Isometry3d T_W_O = Eigen::Isometry3d::Identity();
 };

@@ -22,9 +22,9 @@ namespace fs = std::filesystem;
 // Classes a detector takes for one another.
 int LookAlike(int class_id) {
   static const std::map<std::string, std::string> kPairs = {
-      {"tv", "laptop"},   {"laptop", "tv"},          {"cup", "bowl"},
-      {"chair", "couch"}, {"keyboard", "remote"},    {"mouse", "remote"},
-      {"book", "laptop"}, {"potted plant", "vase"},  {"dining table", "bench"}};
+      {"tv", "laptop"},   {"laptop", "tv"},         {"cup", "bowl"},
+      {"chair", "couch"}, {"keyboard", "remote"},   {"mouse", "remote"},
+      {"book", "laptop"}, {"potted plant", "vase"}, {"dining table", "bench"}};
   const auto it = kPairs.find(std::string(CocoClassName(class_id)));
   return it == kPairs.end() ? class_id : CocoClassId(it->second);
 }
@@ -75,8 +75,9 @@ bool DetectorNoiseConfig::IsValid(std::string* why) const {
       !probability(miss_probability) || !probability(confusion_probability) ||
       !(false_positives_per_frame >= 0.0) || !(box_jitter >= 0.0) || !probability(score_mean) ||
       !(score_sigma >= 0.0)) {
-    *why = "DetectorNoiseConfig: min_visible_px >= 1, small_object_px >= min_visible_px, "
-           "far_m > 0, probabilities in [0, 1], rates and sigmas >= 0 are required";
+    *why =
+        "DetectorNoiseConfig: min_visible_px >= 1, small_object_px >= min_visible_px, "
+        "far_m > 0, probabilities in [0, 1], rates and sigmas >= 0 are required";
     return false;
   }
   return true;
@@ -103,16 +104,18 @@ std::vector<Eigen::Isometry3d> DriftedTrajectory(const std::vector<Eigen::Isomet
     const Eigen::Isometry3d step = trajectory[k - 1].inverse() * trajectory[k];
     const Eigen::Vector3d move_W = trajectory[k - 1].linear() * step.translation();
     const double metres = move_W.norm();
-    const double yaw_deg = drift.yaw_bias_deg_per_m * metres +
-                           drift.yaw_noise_deg_per_m * metres * random.Normal();
+    const double yaw_deg =
+        drift.yaw_bias_deg_per_m * metres + drift.yaw_noise_deg_per_m * metres * random.Normal();
     const Eigen::Matrix3d turn =
         Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     Eigen::Isometry3d next = Eigen::Isometry3d::Identity();
     // World-frame increments applied to the drifted pose: heading error accumulates, so later
     // moves go in a turned direction.
-    const Eigen::Matrix3d heading = drifted.back().linear() * trajectory[k - 1].linear().transpose();
+    const Eigen::Matrix3d heading =
+        drifted.back().linear() * trajectory[k - 1].linear().transpose();
     next.linear() = turn * heading * trajectory[k].linear();
-    next.translation() = drifted.back().translation() + turn * heading * move_W * (1.0 + drift.scale_error);
+    next.translation() =
+        drifted.back().translation() + turn * heading * move_W * (1.0 + drift.scale_error);
     drifted.push_back(next);
   }
   return drifted;
@@ -149,14 +152,19 @@ std::vector<Detection> DetectFromInstances(const Scene& scene, const RenderedFra
     if (e.pixels < config.small_object_px) {
       miss += (1.0 - miss) * (1.0 - static_cast<double>(e.pixels) / config.small_object_px);
     }
-    if (distance > config.far_m) miss += (1.0 - miss) * std::min(1.0, (distance - config.far_m) / config.far_m);
+    if (distance > config.far_m)
+      miss += (1.0 - miss) * std::min(1.0, (distance - config.far_m) / config.far_m);
     if (random.Uniform() < miss) continue;
     const double w = e.u_max - e.u_min + 1, h = e.v_max - e.v_min + 1;
     Detection d;
-    d.box.x_min = static_cast<float>(std::clamp(e.u_min + config.box_jitter * w * random.Normal(), 0.0, width - 2.0));
-    d.box.y_min = static_cast<float>(std::clamp(e.v_min + config.box_jitter * h * random.Normal(), 0.0, height - 2.0));
-    d.box.x_max = static_cast<float>(std::clamp(e.u_max + config.box_jitter * w * random.Normal(), d.box.x_min + 1.0, width - 1.0));
-    d.box.y_max = static_cast<float>(std::clamp(e.v_max + config.box_jitter * h * random.Normal(), d.box.y_min + 1.0, height - 1.0));
+    d.box.x_min = static_cast<float>(
+        std::clamp(e.u_min + config.box_jitter * w * random.Normal(), 0.0, width - 2.0));
+    d.box.y_min = static_cast<float>(
+        std::clamp(e.v_min + config.box_jitter * h * random.Normal(), 0.0, height - 2.0));
+    d.box.x_max = static_cast<float>(std::clamp(e.u_max + config.box_jitter * w * random.Normal(),
+                                                d.box.x_min + 1.0, width - 1.0));
+    d.box.y_max = static_cast<float>(std::clamp(e.v_max + config.box_jitter * h * random.Normal(),
+                                                d.box.y_min + 1.0, height - 1.0));
     d.class_id = random.Uniform() < config.confusion_probability ? LookAlike(object.class_id)
                                                                  : object.class_id;
     d.score = Score(config.score_mean, config.score_sigma, &random);
@@ -203,8 +211,7 @@ std::string GroundTruthJson(const Scene& scene, int surface_points) {
                        {"size", {size.x(), size.y(), size.z()}},
                        {"surface_sample", samples}});
   }
-  return nlohmann::ordered_json{
-      {"kind", scene.kind}, {"seed", scene.seed}, {"objects", objects}}
+  return nlohmann::ordered_json{{"kind", scene.kind}, {"seed", scene.seed}, {"objects", objects}}
       .dump(1);
 }
 
@@ -227,7 +234,7 @@ bool WriteSequence(const Scene& scene, const SequenceOptions& options, const std
   const CameraIntrinsics& K = scene.intrinsics;
   Eigen::Matrix4d intrinsics = Eigen::Matrix4d::Zero();
   intrinsics(0, 0) = K.fx, intrinsics(0, 2) = K.cx, intrinsics(1, 1) = K.fy,
-  intrinsics(1, 2) = K.cy, intrinsics(2, 2) = 1.0;
+                intrinsics(1, 2) = K.cy, intrinsics(2, 2) = 1.0;
   if (!WriteMatrix((fs::path(dir) / "camera-intrinsics.txt").string(), intrinsics, 3, why)) {
     return false;
   }
@@ -268,8 +275,8 @@ bool WriteSequence(const Scene& scene, const SequenceOptions& options, const std
     for (std::size_t f = 0; f < scene.trajectory.size(); ++f) {
       const Eigen::Quaterniond q(scene.trajectory[f].linear());
       const Eigen::Vector3d t = scene.trajectory[f].translation();
-      std::snprintf(line, sizeof(line), "%zu %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", f, t.x(),
-                    t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+      std::snprintf(line, sizeof(line), "%zu %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", f, t.x(), t.y(),
+                    t.z(), q.x(), q.y(), q.z(), q.w());
       corrected << line;
     }
     if (!corrected) {

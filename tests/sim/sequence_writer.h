@@ -63,8 +63,7 @@ struct DriftConfig {
 
 /// The poses a drifting tracker reports along `trajectory` (the first pose is exact).
 [[nodiscard]] std::vector<Eigen::Isometry3d> DriftedTrajectory(
-    const std::vector<Eigen::Isometry3d>& trajectory, const DriftConfig& drift,
-    std::uint64_t seed);
+    const std::vector<Eigen::Isometry3d>& trajectory, const DriftConfig& drift, std::uint64_t seed);
 
 struct SequenceOptions {
   DepthNoiseConfig depth_noise;

@@ -1,5 +1,6 @@
 // objmap_sim: writes a synthetic scene as a recorded sequence with ground truth.
-//   objmap_sim --out DIR [--kind desk|office|kitchen|lab] [--seed N] [--frames N] [--perfect] [--drift]
+//   objmap_sim --out DIR [--kind desk|office|kitchen|lab] [--seed N] [--frames N] [--perfect]
+//   [--drift]
 //              [--procedural]
 #include <cstdlib>
 #include <iostream>
@@ -13,7 +14,8 @@
 namespace {
 
 constexpr char kUsage[] =
-    "usage: objmap_sim --out DIR [--kind desk|office|kitchen|lab] [--seed N] [--frames N] [--perfect]\n"
+    "usage: objmap_sim --out DIR [--kind desk|office|kitchen|lab] [--seed N] [--frames N] "
+    "[--perfect]\n"
     "                  [--drift] [--procedural]\n"
     "  writes DIR/frame-NNNNNN.{color,depth,instance}.png and .pose.txt, camera-intrinsics.txt,\n"
     "  detections.json (the ground-truth detector) and ground_truth.json\n"
@@ -66,8 +68,8 @@ int main(int argc, char** argv) {
   std::string why;
   std::unique_ptr<objmap::sim::FurnitureCatalog> catalog;
   if (!procedural) {
-    catalog = objmap::sim::FurnitureCatalog::Open(objmap::sim::FurnitureCatalog::kDefaultFolder,
-                                                  &why);
+    catalog =
+        objmap::sim::FurnitureCatalog::Open(objmap::sim::FurnitureCatalog::kDefaultFolder, &why);
     if (!catalog) std::cerr << "objmap_sim: " << why << "; procedural objects only\n";
   }
   objmap::sim::Scene scene;
@@ -88,7 +90,7 @@ int main(int argc, char** argv) {
     std::cerr << "objmap_sim: " << why << "\n";
     return 1;
   }
-  std::cout << "objmap_sim: " << kind << " scene (seed " << seed << "), " << frames
-            << " frames, " << scene.objects.size() << " objects, in " << out << "\n";
+  std::cout << "objmap_sim: " << kind << " scene (seed " << seed << "), " << frames << " frames, "
+            << scene.objects.size() << " objects, in " << out << "\n";
   return 0;
 }

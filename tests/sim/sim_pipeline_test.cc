@@ -26,27 +26,30 @@ Result RunCommand(const std::string& command) {
   if (pipe == nullptr) return result;
   std::array<char, 4096> buffer;
   std::size_t n;
-  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) result.output.append(buffer.data(), n);
+  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0)
+    result.output.append(buffer.data(), n);
   const int status = pclose(pipe);
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return result;
 }
 
 TEST(SimPipeline, DriftingDeskMapsScoresAndRegeneratesWithCorrectedPoses) {
-  const fs::path dir = fs::temp_directory_path() / ("objmap_sim_pipeline_" + std::to_string(getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("objmap_sim_pipeline_" + std::to_string(getpid()));
   fs::remove_all(dir);
   const std::string scene = (dir / "desk").string();
   const std::string cli = OBJMAP_CLI_PATH;
   Result run = RunCommand(std::string(OBJMAP_SIM_PATH) + " --out " + scene +
-                   " --kind desk --seed 4 --frames 12 --drift --procedural");
+                          " --kind desk --seed 4 --frames 12 --drift --procedural");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   ASSERT_TRUE(fs::exists(dir / "desk" / "corrected_poses.txt"));
 
-  run = RunCommand(cli + " map " + scene + " --detections " + scene + "/detections.json --out " + scene +
-            "-map");
+  run = RunCommand(cli + " map " + scene + " --detections " + scene + "/detections.json --out " +
+                   scene + "-map");
   ASSERT_EQ(run.exit_code, 0) << run.output;
-  run = RunCommand(cli + " map " + scene + " --detections " + scene + "/detections.json" +
-            " --corrected-poses " + scene + "/corrected_poses.txt --out " + scene + "-fixed");
+  run =
+      RunCommand(cli + " map " + scene + " --detections " + scene + "/detections.json" +
+                 " --corrected-poses " + scene + "/corrected_poses.txt --out " + scene + "-fixed");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   // Every keyframe but the first moved back to its true pose.
   EXPECT_NE(run.output.find("corrected poses: "), std::string::npos) << run.output;

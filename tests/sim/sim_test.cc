@@ -68,8 +68,8 @@ TEST(SimScene, TheHardCasesAreInTheOffice) {
   }
   EXPECT_EQ(tvs, 2);  // side by side
   EXPECT_EQ(keyboards, 1);
-  EXPECT_EQ(cups, 2);  // close together
-  EXPECT_EQ(books, 3);  // stacked
+  EXPECT_EQ(cups, 2);    // close together
+  EXPECT_EQ(books, 3);   // stacked
   EXPECT_GE(chairs, 1);  // one under the desk
 }
 
@@ -84,7 +84,8 @@ TEST(SimScene, ThePapersFourKindsHoldTheirClasses) {
     std::string why;
     ASSERT_TRUE(MakeScene(kind, 1, 10, &scene, &why)) << why;
     std::set<std::string> classes;
-    for (const SceneObject& object : scene.objects) classes.insert(std::string(CocoClassName(object.class_id)));
+    for (const SceneObject& object : scene.objects)
+      classes.insert(std::string(CocoClassName(object.class_id)));
     for (const std::string& name : expected.at(kind)) {
       EXPECT_EQ(classes.count(name), 1u) << kind << " lacks " << name;
     }
@@ -152,7 +153,8 @@ TEST(SimRenderer, GrazingSurfacesAndFarPixelsReadNothing) {
       const std::size_t i = static_cast<std::size_t>(v) * 640 + u;
       const float z = frame.true_depth_m[i];
       if (z <= 0.6f || z >= 4.4f) continue;  // inside the valid range
-      const Eigen::Vector3f ray = Eigen::Vector3f((u - 320.f) / 585.f, (v - 240.f) / 585.f, 1.f).normalized();
+      const Eigen::Vector3f ray =
+          Eigen::Vector3f((u - 320.f) / 585.f, (v - 240.f) / 585.f, 1.f).normalized();
       const double incidence = std::abs(normal.dot(ray));
       if (incidence < cos_limit - 0.01) {
         ++grazing;
@@ -267,7 +269,8 @@ TEST(SimFurniture, CatalogMeshesLoadUprightAtTheirCatalogSize) {
   for (std::size_t k = 0; k < dressed.objects.size(); ++k) {
     EXPECT_EQ(dressed.objects[k].class_id, procedural.objects[k].class_id);
     EXPECT_TRUE(dressed.objects[k].T_W_O.isApprox(procedural.objects[k].T_W_O));
-    replaced += dressed.objects[k].mesh.triangles.size() != procedural.objects[k].mesh.triangles.size();
+    replaced +=
+        dressed.objects[k].mesh.triangles.size() != procedural.objects[k].mesh.triangles.size();
   }
   EXPECT_GE(replaced, 8);  // all but the keyboard and the mouse, where a mesh loads
 }
@@ -287,7 +290,8 @@ TEST(SimSequence, AWrittenSequenceReadsBackWithItsGroundTruthAndDetections) {
   ASSERT_TRUE(reader->ReadFrame(1, &frame, &why)) << why;
   EXPECT_DOUBLE_EQ(frame.intrinsics.fx, 585.0);
   EXPECT_TRUE(frame.T_W_C.isApprox(scene.trajectory[1], 1e-9));
-  const RenderedFrame rendered = Render(scene, scene.trajectory[1], DepthNoiseConfig{}, scene.seed, 1);
+  const RenderedFrame rendered =
+      Render(scene, scene.trajectory[1], DepthNoiseConfig{}, scene.seed, 1);
   for (std::size_t i = 0; i < rendered.depth.depth_m.size(); i += 997) {
     EXPECT_NEAR(frame.depth.depth_m[i], rendered.depth.depth_m[i], 0.0006) << i;  // mm rounding
   }

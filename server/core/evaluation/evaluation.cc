@@ -16,8 +16,7 @@ struct Box {
 
 // Axis-aligned box around a real object's oriented box.
 Box WorldBox(const GroundTruthObject& object) {
-  const Eigen::Vector3d half_extent =
-      object.T_W_B.linear().cwiseAbs() * (0.5 * object.size_m);
+  const Eigen::Vector3d half_extent = object.T_W_B.linear().cwiseAbs() * (0.5 * object.size_m);
   return {object.T_W_B.translation() - half_extent, object.T_W_B.translation() + half_extent};
 }
 
@@ -35,7 +34,8 @@ double Iou(const Box& a, const Box& b) {
 bool CanStandFor(const MappedObject& mapped, const GroundTruthObject& real,
                  const EvaluationConfig& config) {
   const Eigen::Vector3d c_B = real.T_W_B.inverse() * mapped.centroid_W;
-  const Eigen::Vector3d half = 0.5 * real.size_m + Eigen::Vector3d::Constant(config.centroid_margin_m);
+  const Eigen::Vector3d half =
+      0.5 * real.size_m + Eigen::Vector3d::Constant(config.centroid_margin_m);
   if ((c_B.cwiseAbs().array() <= half.array()).all()) return true;
   return Iou({mapped.min_W, mapped.max_W}, WorldBox(real)) >= config.min_box_iou;
 }
@@ -78,8 +78,8 @@ class PointGrid {
 };
 
 // Mean capped distance from every point of `from` to `to`; negative when either is empty.
-double MeanDistance(const std::vector<Eigen::Vector3f>& from, const std::vector<Eigen::Vector3f>& to,
-                    double cap_m) {
+double MeanDistance(const std::vector<Eigen::Vector3f>& from,
+                    const std::vector<Eigen::Vector3f>& to, double cap_m) {
   if (from.empty() || to.empty()) return -1.0;
   const PointGrid grid(to, std::max(0.01, cap_m / 4.0));
   double sum = 0.0;
@@ -92,8 +92,9 @@ double MeanDistance(const std::vector<Eigen::Vector3f>& from, const std::vector<
 bool EvaluationConfig::IsValid(std::string* why) const {
   if (!(centroid_margin_m >= 0.0) || !(min_box_iou > 0.0 && min_box_iou <= 1.0) ||
       !(merge_box_share > 0.0 && merge_box_share <= 1.0) || !(max_model_distance_m > 0.0)) {
-    *why = "EvaluationConfig: centroid_margin_m >= 0, min_box_iou and merge_box_share in (0, 1], "
-           "max_model_distance_m > 0 are required";
+    *why =
+        "EvaluationConfig: centroid_margin_m >= 0, min_box_iou and merge_box_share in (0, 1], "
+        "max_model_distance_m > 0 are required";
     return false;
   }
   return true;
@@ -171,8 +172,8 @@ ObjectEvaluation EvaluateObjects(const std::vector<GroundTruthObject>& real,
     ++counts.true_positives;
     counts.duplicates += static_cast<int>(it->second.size()) - 1;
     // The match is the fullest model; the others are the duplicates.
-    const std::size_t m = *std::max_element(
-        it->second.begin(), it->second.end(), [&](std::size_t a, std::size_t b) {
+    const std::size_t m =
+        *std::max_element(it->second.begin(), it->second.end(), [&](std::size_t a, std::size_t b) {
           return mapped[a].model_W.size() < mapped[b].model_W.size();
         });
     ObjectMatch match;

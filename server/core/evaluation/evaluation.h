@@ -51,8 +51,8 @@ struct EvaluationConfig {
 
 /// Counts of one class (or of all classes, for the totals).
 struct ClassCounts {
-  int real = 0;        ///< real objects
-  int mapped = 0;      ///< mapped objects
+  int real = 0;             ///< real objects
+  int mapped = 0;           ///< mapped objects
   int true_positives = 0;   ///< real objects that a mapped object stands for
   int false_positives = 0;  ///< mapped objects that stand for no real object of their class
   int misses = 0;           ///< real objects no mapped object stands for

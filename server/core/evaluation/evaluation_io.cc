@@ -28,6 +28,17 @@ bool ParseFile(const std::string& path, Json* document, std::string* why) {
   return true;
 }
 
+// The "objects" array of a file's top-level object.
+bool ParseObjectsArray(const std::string& path, Json* document, std::string* why) {
+  if (!ParseFile(path, document, why)) return false;
+  if (!document->is_object() || !document->contains("objects") ||
+      !(*document)["objects"].is_array()) {
+    *why = path + ": \"objects\" (an array) is missing";
+    return false;
+  }
+  return true;
+}
+
 bool ClassOf(const Json& entry, const std::string& where, int* class_id, std::string* why) {
   if (!entry.contains("class") || !entry["class"].is_string()) {
     *why = where + ": \"class\" (a COCO class name) is missing";
@@ -129,9 +140,10 @@ bool ReadMappedObject(const Json& entry, const fs::path& dir, const std::string&
   }
   if (!*claimed) return true;
   const fs::path ply =
-      from_map ? dir / "objects" /
-                     (std::to_string(object->id) + "_" + CocoClassFileName(object->class_id) + ".ply")
-               : dir / entry.value("ply", std::string());
+      from_map
+          ? dir / "objects" /
+                (std::to_string(object->id) + "_" + CocoClassFileName(object->class_id) + ".ply")
+          : dir / entry.value("ply", std::string());
   std::error_code error;
   if (!fs::is_regular_file(ply, error)) return true;  // no model: no model accuracy
   std::vector<std::array<std::uint8_t, 3>> colors;
@@ -144,11 +156,7 @@ bool ReadGroundTruth(const std::string& path, std::vector<GroundTruthObject>* ob
                      std::string* why) {
   objects->clear();
   Json document;
-  if (!ParseFile(path, &document, why)) return false;
-  if (!document.is_object() || !document.contains("objects") || !document["objects"].is_array()) {
-    *why = path + ": \"objects\" (an array) is missing";
-    return false;
-  }
+  if (!ParseObjectsArray(path, &document, why)) return false;
   const Json& entries = document["objects"];
   for (std::size_t i = 0; i < entries.size(); ++i) {
     GroundTruthObject object;
@@ -197,11 +205,7 @@ bool ReadMapDirectory(const std::string& dir, std::vector<MappedObject>* objects
   objects->clear();
   const std::string path = (fs::path(dir) / "objects.json").string();
   Json document;
-  if (!ParseFile(path, &document, why)) return false;
-  if (!document.is_object() || !document.contains("objects") || !document["objects"].is_array()) {
-    *why = path + ": \"objects\" (an array) is missing";
-    return false;
-  }
+  if (!ParseObjectsArray(path, &document, why)) return false;
   const Json& entries = document["objects"];
   for (std::size_t i = 0; i < entries.size(); ++i) {
     MappedObject object;
