@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 
 #include "sim/furniture_catalog.h"
 #include "sim/sim_random.h"
@@ -149,13 +151,15 @@ class SceneBuilder {
       : scene_(scene), random_(random), catalog_(catalog) {}
   // Adds an object; with a catalog, a real mesh of its class scaled into the procedural mesh's
   // bounds replaces it (the procedural one stays when none loads).
-  void Add(const char* class_name, const std::string& name, const TriangleMesh& mesh,
-           const Eigen::Vector3f& position, float yaw) {
+  // `mesh_names` (optional) replaces the class's catalog names.
+  void Add(const std::string& class_name, const std::string& name, const TriangleMesh& mesh,
+           const Eigen::Vector3f& position, float yaw,
+           const std::vector<std::string>* mesh_names = nullptr) {
     SceneObject object;
     object.id = static_cast<int>(scene_->objects.size()) + 1;
     object.class_id = CocoClassId(class_name);
     object.name = name;
-    object.mesh = Dress(class_name, mesh, object.id, &object.name);
+    object.mesh = Dress(class_name, mesh, object.id, mesh_names, &object.name);
     object.T_W_O = Pose(position, yaw).cast<double>();
     scene_->objects.push_back(std::move(object));
   }
@@ -165,10 +169,13 @@ class SceneBuilder {
  private:
   // The pick has a random stream of its own, so that dressing a scene moves nothing in it.
   TriangleMesh Dress(const std::string& class_name, const TriangleMesh& procedural, int id,
-                     std::string* name) {
+                     const std::vector<std::string>* mesh_names, std::string* name) {
     const auto names = CatalogNames().find(class_name);
-    if (catalog_ == nullptr || names == CatalogNames().end()) return procedural;
-    std::vector<const FurnitureEntry*> candidates = catalog_->Named(names->second);
+    if (catalog_ == nullptr || (mesh_names == nullptr && names == CatalogNames().end())) {
+      return procedural;
+    }
+    std::vector<const FurnitureEntry*> candidates =
+        catalog_->Named(mesh_names != nullptr ? *mesh_names : names->second);
     candidates.erase(
         std::remove_if(candidates.begin(), candidates.end(),
                        [](const FurnitureEntry* e) { return e->category == "Exterior"; }),
@@ -505,6 +512,98 @@ bool MakeScene(const std::string& kind, std::uint64_t seed, int frames, Scene* s
                             Jitter({140, 110, 80}, &random));
   }
   scene->trajectory = Sweep(Eigen::Vector3d(desk.x(), desk.y(), 0.8), 1.7, frames, &random);
+  return true;
+}
+
+namespace {
+
+bool Numbers(const nlohmann::json& value, std::size_t n, std::vector<float>* out) {
+  if (!value.is_array() || value.size() != n) return false;
+  out->clear();
+  for (const nlohmann::json& v : value) {
+    if (!v.is_number() || !std::isfinite(v.get<double>())) return false;
+    out->push_back(v.get<float>());
+  }
+  return true;
+}
+
+}  // namespace
+
+bool MakeSceneFromFile(const std::string& path, const FurnitureCatalog* catalog, Scene* scene,
+                       std::string* why) {
+  std::ifstream in(path);
+  const nlohmann::json file =
+      in ? nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false) : nlohmann::json();
+  if (!in || file.is_discarded() || !file.is_object()) {
+    *why = path + ": cannot be read as a JSON object";
+    return false;
+  }
+  std::vector<float> room, target;
+  if (!Numbers(file.value("room", nlohmann::json()), 3, &room) || room[0] <= 0.f ||
+      room[1] <= 0.f || room[2] <= 0.f) {
+    *why = path + ": \"room\" must be [width, depth, height] in metres, all > 0";
+    return false;
+  }
+  const nlohmann::json camera = file.value("camera", nlohmann::json::object());
+  const int frames = camera.value("frames", 300);
+  const double radius = camera.value("radius", 1.7);
+  if (!Numbers(camera.value("target", nlohmann::json()), 3, &target) || frames < 1 ||
+      !(radius > 0.0)) {
+    *why = path + ": \"camera\" needs \"target\" [x, y, z], \"frames\" >= 1, \"radius\" > 0";
+    return false;
+  }
+  *scene = Scene{};
+  scene->kind = file.value("kind", std::string("custom"));
+  scene->seed = file.value("seed", std::uint64_t{1});
+  scene->intrinsics.width = 640;
+  scene->intrinsics.height = 480;
+  scene->intrinsics.fx = scene->intrinsics.fy = 585.0;
+  scene->intrinsics.cx = 320.0;
+  scene->intrinsics.cy = 240.0;
+  Random random(scene->seed, NameHash(scene->kind));
+  SceneBuilder builder(scene, &random, catalog);
+  AddRoom(room[0], room[1], room[2], &random, &scene->structure);
+  const nlohmann::json objects = file.value("objects", nlohmann::json::array());
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const std::string where = path + ": objects[" + std::to_string(i) + "]";
+    const nlohmann::json& entry = objects[i];
+    const std::string class_name = entry.value("class", std::string());
+    std::vector<float> position, size;
+    if (CocoClassId(class_name) < 0) {
+      *why = where + ": class '" + class_name + "' is not a COCO class";
+      return false;
+    }
+    if (!Numbers(entry.value("position", nlohmann::json()), 3, &position)) {
+      *why = where + ": \"position\" must be [x, y, z] (the base centre, metres)";
+      return false;
+    }
+    const bool has_size = entry.contains("size");
+    if (has_size &&
+        (!Numbers(entry["size"], 3, &size) || size[0] <= 0.f || size[1] <= 0.f || size[2] <= 0.f)) {
+      *why = where + ": \"size\" must be [width, depth, height], all > 0";
+      return false;
+    }
+    const std::string mesh_name = entry.value("mesh", std::string());
+    // Without a size the catalog mesh keeps its own; the stand-in box then needs one.
+    if (!has_size) {
+      const std::vector<const FurnitureEntry*> found =
+          catalog != nullptr ? catalog->Named({mesh_name}) : std::vector<const FurnitureEntry*>{};
+      if (found.empty()) {
+        *why = where + ": \"size\" is needed (no catalog mesh '" + mesh_name + "' to take it from)";
+        return false;
+      }
+      size = {found[0]->size_m.x(), found[0]->size_m.y(), found[0]->size_m.z()};
+    }
+    TriangleMesh box;
+    box.AddBox({-size[0] / 2, -size[1] / 2, 0.f}, {size[0] / 2, size[1] / 2, size[2]},
+               Jitter({160, 160, 160}, &random));
+    const std::vector<std::string> names = {mesh_name};
+    builder.Add(class_name, entry.value("name", class_name + " " + std::to_string(i + 1)), box,
+                Eigen::Vector3f(position[0], position[1], position[2]),
+                entry.value("yaw_deg", 0.f) * kPi / 180.f, mesh_name.empty() ? nullptr : &names);
+  }
+  scene->trajectory =
+      Sweep(Eigen::Vector3d(target[0], target[1], target[2]), radius, frames, &random);
   return true;
 }
 

@@ -70,4 +70,15 @@ class FurnitureCatalog;
 [[nodiscard]] bool MakeScene(const std::string& kind, std::uint64_t seed, int frames, Scene* scene,
                              std::string* why, const FurnitureCatalog* catalog = nullptr);
 
+/// A scene from a file instead of a kind and a seed:
+///   {"kind": "my-office", "seed": 3, "room": [5, 4.5, 2.7],
+///    "objects": [{"class": "cup", "mesh": "Coffee mug", "position": [2.1, 3.2, 0.74],
+///                 "yaw_deg": 30, "size": [0.12, 0.08, 0.1], "name": "my mug"}, ...],
+///    "camera": {"target": [2.3, 3.2, 0.8], "radius": 1.7, "frames": 300}}
+/// Positions are the objects' base centres (metres); "mesh" names a catalog model (used when the
+/// catalog has it, scaled to "size"; otherwise a box of "size" stands in); "size" may be left
+/// out when the catalog has the mesh. The camera sweeps an arc in front of the target.
+[[nodiscard]] bool MakeSceneFromFile(const std::string& path, const FurnitureCatalog* catalog,
+                                     Scene* scene, std::string* why);
+
 }  // namespace objmap::sim

@@ -17,9 +17,11 @@ constexpr char kUsage[] =
     "usage: objmap_sim --out DIR [--kind desk|office|kitchen|lab] [--seed N] [--frames N] "
     "[--perfect]\n"
     "                  [--drift] [--procedural]\n"
+    "       objmap_sim --out DIR --scene scene.json [--perfect] [--drift] [--procedural]\n"
     "  writes DIR/frame-NNNNNN.{color,depth,instance}.png and .pose.txt, camera-intrinsics.txt,\n"
     "  detections.json (the ground-truth detector) and ground_truth.json\n"
     "  --kind K     scene kind (default office)\n"
+    "  --scene F    the scene from a file (room, objects, camera; see tests/sim/scene.h)\n"
     "  --seed N     scene, noise and detector seed (default 1)\n"
     "  --frames N   frames along the camera sweep (default 300)\n"
     "  --perfect    no depth noise and a detector without errors\n"
@@ -32,7 +34,7 @@ constexpr char kUsage[] =
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string out, kind = "office";
+  std::string out, kind = "office", scene_file;
   std::uint64_t seed = 1;
   int frames = 300;
   bool perfect = false, drift = false, procedural = false;
@@ -43,6 +45,8 @@ int main(int argc, char** argv) {
       out = argv[++i];
     } else if (arg == "--kind" && has_value) {
       kind = argv[++i];
+    } else if (arg == "--scene" && has_value) {
+      scene_file = argv[++i];
     } else if (arg == "--seed" && has_value) {
       seed = std::strtoull(argv[++i], nullptr, 10);
     } else if (arg == "--frames" && has_value) {
@@ -73,7 +77,10 @@ int main(int argc, char** argv) {
     if (!catalog) std::cerr << "objmap_sim: " << why << "; procedural objects only\n";
   }
   objmap::sim::Scene scene;
-  if (!objmap::sim::MakeScene(kind, seed, frames, &scene, &why, catalog.get())) {
+  const bool made = scene_file.empty()
+                        ? objmap::sim::MakeScene(kind, seed, frames, &scene, &why, catalog.get())
+                        : objmap::sim::MakeSceneFromFile(scene_file, catalog.get(), &scene, &why);
+  if (!made) {
     std::cerr << "objmap_sim: " << why << "\n";
     return 2;
   }
@@ -90,7 +97,8 @@ int main(int argc, char** argv) {
     std::cerr << "objmap_sim: " << why << "\n";
     return 1;
   }
-  std::cout << "objmap_sim: " << kind << " scene (seed " << seed << "), " << frames << " frames, "
-            << scene.objects.size() << " objects, in " << out << "\n";
+  std::cout << "objmap_sim: " << scene.kind << " scene (seed " << scene.seed << "), "
+            << scene.trajectory.size() << " frames, " << scene.objects.size() << " objects, in "
+            << out << "\n";
   return 0;
 }

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <set>
 
@@ -94,6 +95,45 @@ TEST(SimScene, ThePapersFourKindsHoldTheirClasses) {
     std::set<int> seen(middle.instance.begin(), middle.instance.end());
     EXPECT_GE(seen.size(), scene.objects.size() / 2) << kind;
   }
+}
+
+TEST(SimScene, AScenesFileGivesItsRoomObjectsAndCamera) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("objmap_scene_file_" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  const std::string path = (dir / "scene.json").string();
+  std::ofstream(path) << R"({"kind": "two cups", "seed": 9, "room": [4, 3, 2.5],
+    "objects": [
+      {"class": "dining table", "position": [2, 2, 0], "size": [1.2, 0.8, 0.75]},
+      {"class": "cup", "name": "my mug", "position": [1.9, 2, 0.75], "size": [0.1, 0.08, 0.1],
+       "yaw_deg": 90}],
+    "camera": {"target": [2, 2, 0.8], "radius": 1.5, "frames": 4}})";
+  Scene scene;
+  std::string why;
+  ASSERT_TRUE(MakeSceneFromFile(path, nullptr, &scene, &why)) << why;
+  EXPECT_EQ(scene.kind, "two cups");
+  EXPECT_EQ(scene.seed, 9u);
+  ASSERT_EQ(scene.objects.size(), 2u);
+  EXPECT_EQ(scene.objects[1].class_id, CocoClassId("cup"));
+  EXPECT_EQ(scene.objects[1].name, "my mug");
+  EXPECT_TRUE(scene.objects[1].T_W_O.translation().isApprox(Eigen::Vector3d(1.9, 2, 0.75), 1e-6));
+  Eigen::Vector3f min, max;
+  scene.objects[0].mesh.Bounds(&min, &max);
+  EXPECT_NEAR(max.z() - min.z(), 0.75f, 1e-5f);
+  EXPECT_EQ(scene.trajectory.size(), 4u);
+  // The camera looks at the target from inside the room.
+  const Eigen::Vector3d eye = scene.trajectory[2].translation();
+  EXPECT_TRUE(eye.x() > 0 && eye.x() < 4 && eye.y() > 0 && eye.y() < 3) << eye.transpose();
+
+  std::ofstream(path) << R"({"room": [4, 3, 2.5], "camera": {"target": [2, 2, 0.8]},
+    "objects": [{"class": "mug", "position": [1, 1, 0], "size": [0.1, 0.1, 0.1]}]})";
+  EXPECT_FALSE(MakeSceneFromFile(path, nullptr, &scene, &why));
+  EXPECT_NE(why.find("objects[0]: class 'mug' is not a COCO class"), std::string::npos) << why;
+  std::ofstream(path) << R"({"room": [4, 3, 2.5], "camera": {"target": [2, 2, 0.8]},
+    "objects": [{"class": "cup", "mesh": "Coffee mug", "position": [1, 1, 0]}]})";
+  EXPECT_FALSE(MakeSceneFromFile(path, nullptr, &scene, &why));
+  EXPECT_NE(why.find("\"size\" is needed"), std::string::npos) << why;
+  fs::remove_all(dir);
 }
 
 TEST(SimRenderer, APlaneAtAKnownDistanceReadsWithinTheNoiseModel) {
