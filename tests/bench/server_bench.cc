@@ -47,13 +47,6 @@ double Percentile(std::vector<double> values, double p) {
   return values[index];
 }
 
-v1::Box MakeBox(const Eigen::Vector3d& min_W, const Eigen::Vector3d& max_W) {
-  v1::Box box;
-  *box.mutable_min() = Vec3ToProto(min_W);
-  *box.mutable_max() = Vec3ToProto(max_W);
-  return box;
-}
-
 // The query kinds measured, each one RPC.
 enum Query { kClass, kObjectRegion, kIsFree, kOccupancyCounts, kNumQueries };
 const char* const kQueryNames[kNumQueries] = {
@@ -69,10 +62,10 @@ class QueryLoad {
  public:
   QueryLoad(MapClient* client, const Eigen::Vector3d& centre) : client_(client) {
     class_.set_class_name("cup");
-    *region_.mutable_region() =
-        MakeBox(centre - Eigen::Vector3d::Constant(0.5), centre + Eigen::Vector3d::Constant(0.5));
-    *is_free_.mutable_region() =
-        MakeBox(centre - Eigen::Vector3d::Constant(0.1), centre + Eigen::Vector3d::Constant(0.1));
+    *region_.mutable_region() = BoxToProto(centre - Eigen::Vector3d::Constant(0.5),
+                                           centre + Eigen::Vector3d::Constant(0.5));
+    *is_free_.mutable_region() = BoxToProto(centre - Eigen::Vector3d::Constant(0.1),
+                                            centre + Eigen::Vector3d::Constant(0.1));
     *occupancy_.mutable_region() = region_.region();
   }
 

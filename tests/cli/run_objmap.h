@@ -1,5 +1,5 @@
 #pragma once
-// Runs the `objmap` executable as a user would and keeps what it printed.
+// Runs the `objmap` executable (or any command) as a user would and keeps what it printed.
 
 #include <sys/wait.h>
 
@@ -14,8 +14,9 @@ struct CommandResult {
   std::string output;  // stdout and stderr together
 };
 
-inline CommandResult RunObjmap(const std::string& arguments) {
-  const std::string command = std::string(OBJMAP_CLI_PATH) + " " + arguments + " 2>&1";
+/// Runs a shell command line, stdout and stderr together.
+inline CommandResult RunCommand(const std::string& command_line) {
+  const std::string command = command_line + " 2>&1";
   CommandResult result;
   FILE* pipe = popen(command.c_str(), "r");
   if (pipe == nullptr) return result;
@@ -28,5 +29,11 @@ inline CommandResult RunObjmap(const std::string& arguments) {
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return result;
 }
+
+#ifdef OBJMAP_CLI_PATH
+inline CommandResult RunObjmap(const std::string& arguments) {
+  return RunCommand(std::string(OBJMAP_CLI_PATH) + " " + arguments);
+}
+#endif
 
 }  // namespace objmap::testing

@@ -77,13 +77,6 @@ MapClientOptions ClientOptions() {
   return options;
 }
 
-v1::Box MakeBox(const Eigen::Vector3d& min_W, const Eigen::Vector3d& max_W) {
-  v1::Box box;
-  *box.mutable_min() = Vec3ToProto(min_W);
-  *box.mutable_max() = Vec3ToProto(max_W);
-  return box;
-}
-
 // Centres of the occupied 1 cm voxels of a .bt map (pruned inner nodes expanded).
 std::vector<Eigen::Vector3d> OccupiedVoxels(const std::string& bt, double* resolution) {
   octomap::OcTree tree(0.01);
@@ -358,7 +351,7 @@ TEST_F(ServerIntegration, ObjectsByClassRegionAndNearest) {
   const Eigen::Vector3d table_min = Vec3FromProto(table.bounds().min()) - margin;
   const Eigen::Vector3d table_max = Vec3FromProto(table.bounds().max()) + margin;
   v1::QueryObjectsRequest region;
-  *region.mutable_region() = MakeBox(table_min, table_max);
+  *region.mutable_region() = BoxToProto(table_min, table_max);
   v1::QueryObjectsResponse in_region;
   ASSERT_TRUE(client().QueryObjects(region, &in_region).ok());
   std::set<std::int64_t> region_ids;
@@ -372,7 +365,7 @@ TEST_F(ServerIntegration, ObjectsByClassRegionAndNearest) {
   for (const v1::Object& cup : cups) EXPECT_EQ(region_ids.count(cup.id()), 1u) << cup.id();
   // A box of the same size 20 m away holds nothing.
   *region.mutable_region() =
-      MakeBox(table_min + Eigen::Vector3d(20, 0, 0), table_max + Eigen::Vector3d(20, 0, 0));
+      BoxToProto(table_min + Eigen::Vector3d(20, 0, 0), table_max + Eigen::Vector3d(20, 0, 0));
   ASSERT_TRUE(client().QueryObjects(region, &in_region).ok());
   EXPECT_EQ(in_region.objects_size(), 0);
 
@@ -424,7 +417,7 @@ TEST_F(ServerIntegration, AirInFrontOfTheCameraIsFreeAndTheTableTopIsNot) {
   AirInFrontOfFirstCamera(&air_min, &air_max, &problem);
   ASSERT_TRUE(problem.empty()) << problem;
   v1::IsFreeRequest request;
-  *request.mutable_region() = MakeBox(air_min, air_max);
+  *request.mutable_region() = BoxToProto(air_min, air_max);
   v1::IsFreeResponse air;
   ASSERT_TRUE(client().IsFree(request, &air).ok());
   EXPECT_TRUE(air.free()) << air.occupied() << " occupied, " << air.unknown() << " unknown, "
@@ -444,7 +437,8 @@ TEST_F(ServerIntegration, AirInFrontOfTheCameraIsFreeAndTheTableTopIsNot) {
         return (a - centroid).squaredNorm() < (b - centroid).squaredNorm();
       });
   const Eigen::Vector3d half = Eigen::Vector3d::Constant(0.03);
-  *request.mutable_region() = MakeBox(on_top.cast<double>() - half, on_top.cast<double>() + half);
+  *request.mutable_region() =
+      BoxToProto(on_top.cast<double>() - half, on_top.cast<double>() + half);
   for (bool unknown_is_free : {false, true}) {
     request.set_unknown_is_free(unknown_is_free);
     v1::IsFreeResponse table_top;
@@ -479,7 +473,7 @@ TEST_F(ServerIntegration, AirInFrontOfTheCameraIsFreeAndTheTableTopIsNot) {
 
   // The same box of air by QueryOccupancy: known free voxels, none occupied.
   v1::QueryOccupancyRequest occupancy;
-  *occupancy.mutable_region() = MakeBox(air_min, air_max);
+  *occupancy.mutable_region() = BoxToProto(air_min, air_max);
   v1::QueryOccupancyResponse counts;
   ASSERT_TRUE(client().QueryOccupancy(occupancy, &counts).ok());
   EXPECT_EQ(counts.occupied(), 0u);
@@ -710,7 +704,7 @@ TEST_F(ServerIntegration, RigidPoseUpdateMovesObjectsAndOccupancyWhileQueriesAns
     cups.set_class_name("cup");
     v1::IsFreeRequest is_free;
     *is_free.mutable_region() =
-        MakeBox(Eigen::Vector3d::Constant(-0.05), Eigen::Vector3d::Constant(0.05));
+        BoxToProto(Eigen::Vector3d::Constant(-0.05), Eigen::Vector3d::Constant(0.05));
     while (!stop) {
       v1::StatusResponse status;
       const bool regenerating =

@@ -2,36 +2,19 @@
 // desk with drifting odometry, `objmap map` maps it with the ground-truth detections (once as
 // is, once with the corrected poses applied afterwards), `objmap eval` scores both.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
-#include <array>
-#include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
+
+#include "cli/run_objmap.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int exit_code = -1;
-  std::string output;
-};
-
-Result RunCommand(const std::string& command) {
-  Result result;
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  if (pipe == nullptr) return result;
-  std::array<char, 4096> buffer;
-  std::size_t n;
-  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0)
-    result.output.append(buffer.data(), n);
-  const int status = pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
+using objmap::testing::RunCommand;
 
 TEST(SimPipeline, DriftingDeskMapsScoresAndRegeneratesWithCorrectedPoses) {
   const fs::path dir =
@@ -39,8 +22,9 @@ TEST(SimPipeline, DriftingDeskMapsScoresAndRegeneratesWithCorrectedPoses) {
   fs::remove_all(dir);
   const std::string scene = (dir / "desk").string();
   const std::string cli = OBJMAP_CLI_PATH;
-  Result run = RunCommand(std::string(OBJMAP_SIM_PATH) + " --out " + scene +
-                          " --kind desk --seed 4 --frames 12 --drift --procedural");
+  objmap::testing::CommandResult run =
+      RunCommand(std::string(OBJMAP_SIM_PATH) + " --out " + scene +
+                 " --kind desk --seed 4 --frames 12 --drift --procedural");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   ASSERT_TRUE(fs::exists(dir / "desk" / "corrected_poses.txt"));
 
