@@ -175,14 +175,19 @@ bool ApplyCorrectedPoses(const std::string& path, const SequenceRunReport& repor
     const auto it = by_frame.find(keyframe.frame_index);
     if (it != by_frame.end()) poses[keyframe.result.keyframe_id] = it->second;
   }
-  int moved = 0;
+  PoseUpdateReport update;
   const auto start = std::chrono::steady_clock::now();
-  if (!mapper->UpdatePoses(poses, why, &moved)) {
+  if (!mapper->UpdatePoses(poses, why, &update)) {
     *why = path + ": " + *why;
     return false;
   }
-  std::cout << "corrected poses: " << moved << " of " << report.keyframes.size()
-            << " keyframes moved; map regenerated in " << std::fixed << std::setprecision(1)
+  std::cout << "corrected poses: " << update.keyframes_moved << " of " << report.keyframes.size()
+            << " keyframes moved; ";
+  if (update.reassociated) {
+    std::cout << "objects re-associated (" << update.objects_before << " -> "
+              << update.objects_after << "), ";
+  }
+  std::cout << "map regenerated in " << std::fixed << std::setprecision(1)
             << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()
             << " s\n";
   return true;

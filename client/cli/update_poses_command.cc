@@ -48,8 +48,12 @@ int RunUpdatePosesCommand(int argc, char** argv) {
   // Without --wait the server answers once the poses are stored, before it knows which moved.
   if (response.regenerated()) {
     std::cout << "map version " << response.map_version() << ": " << response.keyframes_moved()
-              << " of " << poses.size() << " keyframes moved; regenerated in "
-              << response.regeneration_ms() << " ms\n";
+              << " of " << poses.size() << " keyframes moved; ";
+    if (response.reassociated()) {
+      std::cout << "objects re-associated (" << response.objects_before() << " -> "
+                << response.objects_after() << "), ";
+    }
+    std::cout << "regenerated in " << response.regeneration_ms() << " ms\n";
   } else {
     std::cout << "map version " << response.map_version() << ": " << poses.size()
               << " poses stored; regeneration queued (`objmap status` shows when it is done)\n";

@@ -69,6 +69,11 @@ void VisitMapModel(MapperConfig* m, Visitor& v) {
   v("min_confidence", &i.min_confidence);
   v("min_detection_rate", &i.min_detection_rate);
   v("occlusion_margin_m", &i.occlusion_margin_m);
+  ReassociationConfig& r = m->reassociation;
+  v.Section("reassociation");
+  v("enabled", &r.enabled);
+  v("min_translation_m", &r.min_translation_m);
+  v("min_rotation_rad", &r.min_rotation_rad);
 }
 
 template <typename Visitor>

@@ -106,6 +106,9 @@ grpc::Status MapServiceImpl::UpdatePoses(grpc::ServerContext* /*context*/,
     response->set_map_version(outcome.map_version);
     response->set_regenerated(outcome.regenerated);
     response->set_keyframes_moved(outcome.keyframes_moved);
+    response->set_reassociated(outcome.reassociated);
+    response->set_objects_before(outcome.objects_before);
+    response->set_objects_after(outcome.objects_after);
     response->set_regeneration_ms(outcome.regeneration_ms);
     return status;
   });

@@ -69,9 +69,11 @@ class MapServerScene : public ::testing::Test {
     }
   }
 
-  std::vector<std::shared_ptr<const ObjectView>> Cups(const MapServer& server) const {
+  std::vector<std::shared_ptr<const ObjectView>> Cups(const MapServer& server,
+                                                      bool include_unconfirmed = false) const {
     ObjectFilter filter;
     filter.class_id = kCup;
+    filter.include_unconfirmed = include_unconfirmed;
     std::vector<std::shared_ptr<const ObjectView>> cups;
     std::uint64_t version = 0;
     EXPECT_TRUE(server.QueryObjects(filter, &cups, &version).ok());
@@ -375,6 +377,49 @@ TEST_F(MapServerScene, PoseUpdateMovesObjectsAndOccupancy) {
   const auto restored = Cups(*server);
   ASSERT_EQ(restored.size(), after.size());
   for (std::size_t i = 0; i < after.size(); ++i) {
+    EXPECT_LT((restored[i]->centroid_W - after[i]->centroid_W).norm(), 1e-4);
+  }
+}
+
+// The third view arrives with a pose drifted 15 cm sideways, so its cups are two more objects; a
+// loop closure corrects that one keyframe. The correction is not rigid: the server re-associates,
+// stores the new grouping in place of the old one, and a restart gives the same objects.
+TEST_F(MapServerScene, NonRigidCorrectionReassociatesAndTheStoreKeepsTheNewGrouping) {
+  auto server = OpenServer();
+  ASSERT_TRUE(server);
+  Eigen::Isometry3d drifted = Pose(2);
+  drifted.pretranslate(Eigen::Vector3d(0.0, 0.15, 0.0));
+  for (int view = 0; view < 3; ++view) {
+    RgbdFrame frame = testing::RenderFrame(boxes_, K_, Pose(view), "view-" + std::to_string(view));
+    if (view == 2) frame.T_W_C = drifted;
+    AddKeyframeOutcome outcome;
+    ASSERT_TRUE(server->AddKeyframe(frame, CupDetections(view), &outcome).ok());
+  }
+  ASSERT_EQ(Cups(*server, true).size(), 4u);
+  EXPECT_EQ(Cups(*server).size(), 0u) << "two views each are too few for the inventory";
+
+  PoseUpdateOutcome outcome;
+  const ServiceStatus status = server->UpdatePoses({{3, Pose(2)}}, true, &outcome);
+  ASSERT_TRUE(status.ok()) << status.message;
+  EXPECT_TRUE(outcome.reassociated);
+  EXPECT_EQ(outcome.objects_before, 4);
+  EXPECT_EQ(outcome.objects_after, 2);
+  EXPECT_EQ(Cups(*server, true).size(), 2u);
+  const auto after = Cups(*server);
+  ASSERT_EQ(after.size(), 2u);
+  for (const auto& cup : after) {
+    EXPECT_EQ(cup->observations, 3);
+    EXPECT_NEAR(std::abs(cup->centroid_W.y()), 0.2, 0.05);
+  }
+
+  server.reset();
+  server = OpenServer();
+  ASSERT_TRUE(server);
+  const auto restored = Cups(*server);
+  ASSERT_EQ(restored.size(), after.size());
+  for (std::size_t i = 0; i < after.size(); ++i) {
+    EXPECT_EQ(restored[i]->id, after[i]->id);
+    EXPECT_EQ(restored[i]->observations, 3);
     EXPECT_LT((restored[i]->centroid_W - after[i]->centroid_W).norm(), 1e-4);
   }
 }

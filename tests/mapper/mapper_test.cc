@@ -133,7 +133,10 @@ TEST_F(MapperScene, PoseUpdateRegeneratesObjectsAndOccupancy) {
   std::map<KeyframeId, Eigen::Isometry3d> poses;
   for (int view = 0; view < 3; ++view) poses[view + 1] = G * Pose(view);
   std::string why;
-  ASSERT_TRUE(mapper.UpdatePoses(poses, &why)) << why;
+  PoseUpdateReport rigid;
+  ASSERT_TRUE(mapper.UpdatePoses(poses, &why, &rigid)) << why;
+  EXPECT_EQ(rigid.keyframes_moved, 3);
+  EXPECT_FALSE(rigid.reassociated) << "a rigid move of the whole map keeps every association";
 
   ASSERT_EQ(mapper.objects().size(), before.size());
   for (const auto& [id, centroid] : before) {
@@ -150,12 +153,65 @@ TEST_F(MapperScene, PoseUpdateRegeneratesObjectsAndOccupancy) {
   Eigen::Isometry3d resent = poses[2];
   resent.translation().x() += 1e-9;
   resent.rotate(Eigen::AngleAxisd(1e-9, Eigen::Vector3d::UnitX()));
-  int moved = -1;
-  ASSERT_TRUE(mapper.UpdatePoses({{1, poses[1]}, {2, resent}}, &why, &moved)) << why;
-  EXPECT_EQ(moved, 0);
+  PoseUpdateReport report;
+  ASSERT_TRUE(mapper.UpdatePoses({{1, poses[1]}, {2, resent}}, &why, &report)) << why;
+  EXPECT_EQ(report.keyframes_moved, 0);
   resent.translation().x() += 1e-3;
-  ASSERT_TRUE(mapper.UpdatePoses({{2, resent}}, &why, &moved)) << why;
-  EXPECT_EQ(moved, 1);
+  ASSERT_TRUE(mapper.UpdatePoses({{2, resent}}, &why, &report)) << why;
+  EXPECT_EQ(report.keyframes_moved, 1);
+  EXPECT_FALSE(report.reassociated) << "a millimetre is within the rigid tolerance";
+}
+
+// Odometry drifted 15 cm sideways before the third view, so its cups landed where no cup was and
+// became two more objects. A loop closure that corrects only that keyframe is not rigid: the
+// association is replayed with the corrected pose and the third view's cups join the first two.
+TEST_F(MapperScene, NonRigidCorrectionReassociatesAndKeepsTheIdsOfTheObjectsThatStay) {
+  Mapper mapper{MapperConfig{}};
+  Eigen::Isometry3d drifted = Pose(2);
+  drifted.pretranslate(Eigen::Vector3d(0.0, 0.15, 0.0));
+  for (int view = 0; view < 3; ++view) {
+    RgbdFrame frame = Frame(view);
+    if (view == 2) frame.T_W_C = drifted;
+    KeyframeResult result;
+    std::string why;
+    ASSERT_TRUE(mapper.AddKeyframe(frame, CupDetections(view), &result, &why)) << why;
+  }
+  ASSERT_EQ(mapper.objects().size(), 4u) << "the drifted view's cups are two more objects";
+  std::vector<ObjectId> seen_twice;
+  for (const auto& [id, object] : mapper.objects().objects()) {
+    if (object.observations.size() == 2u) seen_twice.push_back(id);
+  }
+  ASSERT_EQ(seen_twice.size(), 2u);
+
+  std::string why;
+  PoseUpdateReport report;
+  ASSERT_TRUE(mapper.UpdatePoses({{3, Pose(2)}}, &why, &report)) << why;
+  EXPECT_TRUE(report.reassociated);
+  EXPECT_EQ(report.objects_before, 4);
+  EXPECT_EQ(report.objects_after, 2);
+  ASSERT_EQ(mapper.objects().size(), 2u);
+  for (ObjectId id : seen_twice) {
+    const MapObject* object = mapper.objects().Find(id);
+    ASSERT_NE(object, nullptr) << "object " << id << " keeps its id";
+    EXPECT_EQ(object->observations.size(), 3u);
+    EXPECT_EQ(object->Keyframes(), (std::vector<KeyframeId>{1, 2, 3}));
+    EXPECT_NEAR(std::abs(object->centroid_W.y()), 0.2, 0.05);
+  }
+  EXPECT_GT(mapper.objects().next_id(), 4u) << "ids are never reused";
+
+  // With re-association off the correction only moves the drifted models into place.
+  MapperConfig keep;
+  keep.reassociation.enabled = false;
+  Mapper kept{keep};
+  for (int view = 0; view < 3; ++view) {
+    RgbdFrame frame = Frame(view);
+    if (view == 2) frame.T_W_C = drifted;
+    KeyframeResult result;
+    ASSERT_TRUE(kept.AddKeyframe(frame, CupDetections(view), &result, &why)) << why;
+  }
+  ASSERT_TRUE(kept.UpdatePoses({{3, Pose(2)}}, &why, &report)) << why;
+  EXPECT_FALSE(report.reassociated);
+  EXPECT_EQ(kept.objects().size(), 4u);
 }
 
 TEST_F(MapperScene, RestoreLoadsAUsableCheckpointAndIntegratesOnlyTheLaterKeyframes) {

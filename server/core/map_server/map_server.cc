@@ -265,8 +265,8 @@ MapJob::Result MapServer::Impl::ApplyPoses(MapJob* job) {
   const auto start = Clock::now();
   regenerating = true;
   std::string why;
-  int moved = 0;
-  const bool ok = mapper->UpdatePoses(job->poses, &why, &moved);
+  PoseUpdateReport report;
+  const bool ok = mapper->UpdatePoses(job->poses, &why, &report);
   regenerating = false;
   if (!ok) {  // validated before queueing; only a bug gets here
     out.status = {StatusCode::kInternal, "regeneration failed: " + why};
@@ -275,10 +275,22 @@ MapJob::Result MapServer::Impl::ApplyPoses(MapJob* job) {
   const double elapsed_ms = MillisecondsSince(start);
   SnapshotBuilder::Diff diff;
   auto next = snapshot_builder.Build(*mapper, job->version, &diff);
-  StoreChange change;  // object summaries follow the moved models
-  for (ObjectId id : diff.updated) {
-    if (const MapObject* object = mapper->objects().Find(id)) {
-      change.object_summaries.push_back(Summarize(*object));
+  StoreChange change;
+  if (report.reassociated) {
+    // Objects were regrouped: the store's observations are replaced by the new grouping.
+    change.replace_all_objects = true;
+    for (const auto& [id, object] : mapper->objects().objects()) {
+      for (const ObjectObservation& observation : object.observations) {
+        change.observations.push_back({id, observation});
+      }
+      change.object_summaries.push_back(Summarize(object));
+    }
+    change.next_object_id = mapper->objects().next_id();
+  } else {  // object summaries follow the moved models
+    for (ObjectId id : diff.updated) {
+      if (const MapObject* object = mapper->objects().Find(id)) {
+        change.object_summaries.push_back(Summarize(*object));
+      }
     }
   }
   change.map_version = job->version;
@@ -287,12 +299,15 @@ MapJob::Result MapServer::Impl::ApplyPoses(MapJob* job) {
   }
   last_regeneration_ms = elapsed_ms;
   last_regeneration_version = job->version;
-  if (moved > 0) checkpoint_due = true;
+  if (report.keyframes_moved > 0) checkpoint_due = true;
   Publish(std::move(next), MapChange{job->version, MapChange::Kind::kPosesUpdated, 0, diff.added,
                                      diff.updated, diff.removed});
   out.poses.map_version = job->version;
   out.poses.regenerated = true;
-  out.poses.keyframes_moved = moved;
+  out.poses.keyframes_moved = report.keyframes_moved;
+  out.poses.reassociated = report.reassociated;
+  out.poses.objects_before = report.objects_before;
+  out.poses.objects_after = report.objects_after;
   out.poses.regeneration_ms = elapsed_ms;
   return out;
 }

@@ -120,6 +120,9 @@ struct PoseUpdateOutcome {
   bool regenerated = false;       ///< waited and done
   int keyframes_moved = 0;
   double regeneration_ms = 0.0;
+  bool reassociated = false;  ///< objects regrouped (MapperConfig::reassociation)
+  int objects_before = 0;
+  int objects_after = 0;
 };
 
 /// One change of the map, in version order.

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <shared_mutex>
 #include <sstream>
@@ -78,6 +79,68 @@ KeyframeRecord MakeRecord(const RgbdFrame& frame,
   return record;
 }
 
+// Assigns one keyframe's segments to objects of `map` (or new ones); the observations are moved
+// into the map. Returns the object that took each observation, in their order.
+std::vector<ObjectId> AssociateKeyframe(ObjectMap* map, Associator* associator,
+                                        std::vector<ObjectObservation>* observations,
+                                        const Eigen::Isometry3d& T_W_C, KeyframeResult* result) {
+  std::vector<SegmentToAssociate> segments;
+  for (const ObjectObservation& observation : *observations) {
+    SegmentToAssociate segment;
+    segment.points_W = ToWorld(observation.segment_C.points, T_W_C);
+    segment.class_id = observation.class_scores.front().first;
+    segments.push_back(std::move(segment));
+  }
+  const auto assignment = associator->AssignKeyframe(*map, segments);
+  std::vector<ObjectId> targets;
+  for (std::size_t s = 0; s < observations->size(); ++s) {
+    ObjectObservation observation = std::move((*observations)[s]);
+    if (assignment[s]) {
+      map->AddObservation(*assignment[s], std::move(observation), T_W_C);
+      result->updated.push_back(*assignment[s]);
+      targets.push_back(*assignment[s]);
+    } else {
+      result->created.push_back(map->AddObject(std::move(observation), T_W_C));
+      targets.push_back(result->created.back());
+    }
+  }
+  return targets;
+}
+
+// Duplicates arise when a first partial view did not overlap enough; once the models grow they
+// overlap, and the paper's map would keep both (its "duplicate from bad depth" failure).
+void MergeDuplicates(ObjectMap* map, Associator* associator, KeyframeResult* result) {
+  std::vector<ObjectId> touched = result->created;
+  touched.insert(touched.end(), result->updated.begin(), result->updated.end());
+  for (const auto& [kept, absorbed] : associator->FindDuplicates(*map, touched)) {
+    if (map->Merge(kept, absorbed)) result->merged.emplace_back(kept, absorbed);
+  }
+  if (!result->merged.empty()) associator->ForgetMissing(*map);
+}
+
+// True when the corrections T_new * T_old^-1 of all keyframes agree within the tolerance: the
+// whole map moved as one body, and no association changes.
+bool IsRigidCorrection(const std::map<KeyframeId, KeyframeRecord>& keyframes,
+                       const std::map<KeyframeId, Eigen::Isometry3d>& new_poses,
+                       const ReassociationConfig& config) {
+  std::optional<Eigen::Isometry3d> reference;
+  for (const auto& [id, record] : keyframes) {
+    auto it = new_poses.find(id);
+    const Eigen::Isometry3d correction =
+        it == new_poses.end() ? Eigen::Isometry3d::Identity() : it->second * record.T_W_C.inverse();
+    if (!reference) {
+      reference = correction;
+      continue;
+    }
+    const Eigen::Isometry3d difference = reference->inverse() * correction;
+    if (difference.translation().norm() > config.min_translation_m ||
+        Eigen::AngleAxisd(difference.linear()).angle() > config.min_rotation_rad) {
+      return false;
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 bool InventoryConfig::IsValid(std::string* why) const {
@@ -92,9 +155,18 @@ bool InventoryConfig::IsValid(std::string* why) const {
   return true;
 }
 
+bool ReassociationConfig::IsValid(std::string* why) const {
+  if (!(min_translation_m >= 0.f) || !(min_rotation_rad >= 0.f)) {
+    *why = "ReassociationConfig: min_translation_m and min_rotation_rad must be >= 0";
+    return false;
+  }
+  return true;
+}
+
 bool MapperConfig::IsValid(std::string* why) const {
   if (!segmenter.IsValid(why) || !detection_segment.IsValid(why) || !association.IsValid(why) ||
-      !objects.IsValid(why) || !occupancy.IsValid(why) || !inventory.IsValid(why)) {
+      !objects.IsValid(why) || !occupancy.IsValid(why) || !inventory.IsValid(why) ||
+      !reassociation.IsValid(why)) {
     return false;
   }
   if (!(min_detection_score >= 0.f && min_detection_score <= 1.f)) {
@@ -130,45 +202,11 @@ struct Mapper::Impl {
   std::map<KeyframeId, KeyframeRecord> keyframes;
   KeyframeId next_keyframe_id = 1;
 
-  void Associate(std::vector<SegmentedDetection>* segmented, const Eigen::Isometry3d& T_W_C,
-                 KeyframeResult* result);
-  void MergeDuplicates(KeyframeResult* result);
+  void Reassociate();
   KeyframePoseLookup PoseLookup() const;
   void RebuildOccupancy();
   bool RestoreOccupancy(const OccupancyCheckpoint& checkpoint, int* integrated, std::string* why);
 };
-
-void Mapper::Impl::Associate(std::vector<SegmentedDetection>* segmented,
-                             const Eigen::Isometry3d& T_W_C, KeyframeResult* result) {
-  std::vector<SegmentToAssociate> segments;
-  for (const SegmentedDetection& entry : *segmented) {
-    SegmentToAssociate segment;
-    segment.points_W = ToWorld(entry.observation.segment_C.points, T_W_C);
-    segment.class_id = entry.observation.class_scores.front().first;
-    segments.push_back(std::move(segment));
-  }
-  const auto assignment = associator.AssignKeyframe(objects, segments);
-  for (std::size_t s = 0; s < segmented->size(); ++s) {
-    ObjectObservation observation = std::move((*segmented)[s].observation);
-    if (assignment[s]) {
-      objects.AddObservation(*assignment[s], std::move(observation), T_W_C);
-      result->updated.push_back(*assignment[s]);
-    } else {
-      result->created.push_back(objects.AddObject(std::move(observation), T_W_C));
-    }
-  }
-}
-
-// Duplicates arise when a first partial view did not overlap enough; once the models grow they
-// overlap, and the paper's map would keep both (its "duplicate from bad depth" failure).
-void Mapper::Impl::MergeDuplicates(KeyframeResult* result) {
-  std::vector<ObjectId> touched = result->created;
-  touched.insert(touched.end(), result->updated.begin(), result->updated.end());
-  for (const auto& [kept, absorbed] : associator.FindDuplicates(objects, touched)) {
-    if (objects.Merge(kept, absorbed)) result->merged.emplace_back(kept, absorbed);
-  }
-  if (!result->merged.empty()) associator.ForgetMissing(objects);
-}
 
 KeyframePoseLookup Mapper::Impl::PoseLookup() const {
   return [this](KeyframeId id) -> std::optional<Eigen::Isometry3d> {
@@ -176,6 +214,73 @@ KeyframePoseLookup Mapper::Impl::PoseLookup() const {
     if (it == keyframes.end()) return std::nullopt;
     return it->second.T_W_C;
   };
+}
+
+// Replays every observation, keyframe by keyframe in id order, through the association with the
+// current poses, exactly as AddKeyframe would have met them. An object of the replay takes the id
+// of the old object that gave it most of its observations (each old id once, the largest shares
+// first); the rest get new ids, so a client's ids stay valid where the object is still the same.
+void Mapper::Impl::Reassociate() {
+  struct Held {
+    ObjectId old_id;
+    ObjectObservation observation;
+  };
+  std::map<KeyframeId, std::vector<Held>> by_keyframe;
+  for (const auto& [id, object] : objects.objects()) {
+    for (const ObjectObservation& observation : object.observations) {
+      by_keyframe[observation.keyframe_id].push_back({id, observation});
+    }
+  }
+  ObjectMap replay(config.objects);
+  Associator replay_associator(config.association);
+  // For each replayed object: the old ids of its observations, with multiplicity.
+  std::map<ObjectId, std::map<ObjectId, int>> sources;
+  for (auto& [keyframe_id, held] : by_keyframe) {
+    auto keyframe = keyframes.find(keyframe_id);
+    if (keyframe == keyframes.end()) continue;  // observations always have their keyframe
+    std::vector<ObjectObservation> observations;
+    for (Held& h : held) observations.push_back(std::move(h.observation));
+    KeyframeResult result;
+    const std::vector<ObjectId> targets = AssociateKeyframe(
+        &replay, &replay_associator, &observations, keyframe->second.T_W_C, &result);
+    for (std::size_t s = 0; s < held.size(); ++s) ++sources[targets[s]][held[s].old_id];
+    MergeDuplicates(&replay, &replay_associator, &result);
+    for (const auto& [kept, absorbed] : result.merged) {
+      for (const auto& [old_id, count] : sources[absorbed]) sources[kept][old_id] += count;
+      sources.erase(absorbed);
+    }
+  }
+
+  struct Share {
+    int count;
+    ObjectId replayed;
+    ObjectId old_id;
+  };
+  std::vector<Share> shares;
+  for (const auto& [replayed, counts] : sources) {
+    for (const auto& [old_id, count] : counts) shares.push_back({count, replayed, old_id});
+  }
+  std::sort(shares.begin(), shares.end(), [](const Share& a, const Share& b) {
+    if (a.count != b.count) return a.count > b.count;
+    return a.replayed != b.replayed ? a.replayed < b.replayed : a.old_id < b.old_id;
+  });
+  std::map<ObjectId, ObjectId> final_id;  // replayed -> id it keeps
+  std::set<ObjectId> old_ids_taken;
+  for (const Share& share : shares) {
+    if (final_id.count(share.replayed) > 0 || old_ids_taken.count(share.old_id) > 0) continue;
+    final_id[share.replayed] = share.old_id;
+    old_ids_taken.insert(share.old_id);
+  }
+  ObjectId next_id = objects.next_id();
+  std::map<ObjectId, std::vector<ObjectObservation>> regrouped;
+  for (const auto& [replayed, object] : replay.objects()) {
+    auto it = final_id.find(replayed);
+    const ObjectId id = it != final_id.end() ? it->second : next_id++;
+    regrouped[id] = object.observations;
+  }
+  objects.Restore(std::move(regrouped), next_id, PoseLookup());
+  // Ids now name other models whose versions restart: the cached k-d trees are stale.
+  associator = Associator(config.association);
 }
 
 // The checkpoint's OctoMap plus the keyframes after it, when the checkpoint still describes the
@@ -245,8 +350,10 @@ bool Mapper::AddKeyframe(const RgbdFrame& frame, const std::vector<Detection>& d
   result->timings.segmentation_ms = MillisecondsSince(start);
 
   start = Clock::now();
-  impl_->Associate(&segmented, frame.T_W_C, result);
-  impl_->MergeDuplicates(result);
+  std::vector<ObjectObservation> observations;
+  for (SegmentedDetection& entry : segmented) observations.push_back(std::move(entry.observation));
+  AssociateKeyframe(&impl_->objects, &impl_->associator, &observations, frame.T_W_C, result);
+  MergeDuplicates(&impl_->objects, &impl_->associator, result);
   result->timings.association_ms = MillisecondsSince(start);
 
   start = Clock::now();
@@ -263,7 +370,7 @@ bool Mapper::AddKeyframe(const RgbdFrame& frame, const std::vector<Detection>& d
 }
 
 bool Mapper::UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses, std::string* why,
-                         int* moved_count) {
+                         PoseUpdateReport* report) {
   for (const auto& [id, T_W_C] : poses) {
     if (impl_->keyframes.count(id) == 0) {
       *why = "unknown keyframe id " + std::to_string(id);
@@ -275,6 +382,13 @@ bool Mapper::UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses, s
       return false;
     }
   }
+  PoseUpdateReport local_report;
+  if (report == nullptr) report = &local_report;
+  *report = PoseUpdateReport{};
+  report->objects_before = static_cast<int>(impl_->objects.size());
+  const ReassociationConfig& reassociation = impl_->config.reassociation;
+  const bool reassociate =
+      reassociation.enabled && !IsRigidCorrection(impl_->keyframes, poses, reassociation);
   std::set<KeyframeId> moved;
   for (const auto& [id, T_W_C] : poses) {
     KeyframeRecord& record = impl_->keyframes[id];
@@ -282,9 +396,18 @@ bool Mapper::UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses, s
     record.T_W_C = T_W_C;
     moved.insert(id);
   }
-  if (moved_count != nullptr) *moved_count = static_cast<int>(moved.size());
-  if (moved.empty()) return true;
-  impl_->objects.RebuildObserving(moved, impl_->PoseLookup());
+  report->keyframes_moved = static_cast<int>(moved.size());
+  if (moved.empty()) {
+    report->objects_after = report->objects_before;
+    return true;
+  }
+  if (reassociate) {
+    impl_->Reassociate();
+    report->reassociated = true;
+  } else {
+    impl_->objects.RebuildObserving(moved, impl_->PoseLookup());
+  }
+  report->objects_after = static_cast<int>(impl_->objects.size());
   impl_->RebuildOccupancy();
   return true;
 }

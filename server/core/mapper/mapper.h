@@ -35,6 +35,22 @@ struct InventoryConfig {
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
 
+/// Whether a pose update re-associates the objects. Association depends on where the keyframes
+/// are relative to each other: after a loop closure bends the trajectory, segments that drift
+/// put beside their object (a duplicate) or on top of a neighbour (a merge) belong elsewhere, and
+/// only replaying the association with the corrected poses undoes that. A rigid move of the whole
+/// map changes no association and only moves the models.
+struct ReassociationConfig {
+  bool enabled = true;
+  /// The update re-associates when some keyframe's correction (new pose * old pose^-1) differs
+  /// from the first keyframe's correction by more than this translation (metres) ...
+  float min_translation_m = 0.02f;
+  /// ... or this rotation (radians).
+  float min_rotation_rad = 0.0175f;
+
+  [[nodiscard]] bool IsValid(std::string* why) const;
+};
+
 /// The aggregate configuration of the mapping pipeline: one struct per component.
 struct MapperConfig {
   SegmenterConfig segmenter;
@@ -43,6 +59,7 @@ struct MapperConfig {
   ObjectMapConfig objects;
   OccupancyConfig occupancy;
   InventoryConfig inventory;
+  ReassociationConfig reassociation;
   /// Detections scoring lower are ignored.
   float min_detection_score = 0.15f;
   /// Segments with fewer points after model downsampling are dropped (too small to model).
@@ -91,6 +108,16 @@ struct InventoryEntry {
 /// Groups objects by label: count, mean confidence and ids per class, most frequent first.
 [[nodiscard]] std::vector<InventoryEntry> InventoryOf(const std::vector<const MapObject*>& objects);
 
+/// What a pose update did.
+struct PoseUpdateReport {
+  int keyframes_moved = 0;
+  /// The objects were re-associated from their observations (ReassociationConfig); ids of
+  /// objects that keep most of their observations survive, the others are new or gone.
+  bool reassociated = false;
+  int objects_before = 0;
+  int objects_after = 0;
+};
+
 /// What the mapper keeps of a keyframe to regenerate the map after its pose changes: the depth
 /// image (millimetres, as sensors deliver it: 2 bytes a pixel) and which pixels belong to objects.
 /// Clouds are re-made from it, so a regenerated map is the map full-resolution integration builds.
@@ -134,12 +161,13 @@ class Mapper {
 
   /// Replaces keyframe poses (a pose-graph update) and regenerates the object models and the
   /// occupancy map from the stored keyframe clouds. Unknown ids or bad poses: false, map unchanged.
-  /// Only objects seen from moved keyframes are rebuilt; the OctoMap is rebuilt (aside, then
-  /// swapped) when any keyframe moved. A pose within 1 um and 1 urad of the current one is the
-  /// same pose sent again and moves nothing. `moved` (may be null) receives how many keyframes
-  /// moved.
+  /// A non-rigid correction (ReassociationConfig) replays the association of every stored
+  /// observation, keyframe by keyframe, with the new poses; otherwise only objects seen from
+  /// moved keyframes are rebuilt. The OctoMap is rebuilt (aside, then swapped) when any keyframe
+  /// moved. A pose within 1 um and 1 urad of the current one is the same pose sent again and
+  /// moves nothing. `report` may be null.
   [[nodiscard]] bool UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses,
-                                 std::string* why, int* moved = nullptr);
+                                 std::string* why, PoseUpdateReport* report = nullptr);
 
   /// Replaces the whole state by stored keyframes and object observations (a restart): object
   /// models are rebuilt from them; keyframe ids continue after the largest one. The OctoMap is

@@ -78,7 +78,7 @@ void ObjectMap::AddToModel(MapObject* object, const ObjectObservation& observati
 
 void ObjectMap::UpdateBounds(MapObject* object) {
   const ColoredPoints points = object->model_W.Points();
-  ++object->version;
+  object->version = ++last_model_version_;
   if (points.empty()) {
     object->centroid_W = object->min_W = object->max_W = Eigen::Vector3f::Zero();
     return;

@@ -45,7 +45,9 @@ struct MapObject {
   Eigen::Vector3f centroid_W = Eigen::Vector3f::Zero();
   Eigen::Vector3f min_W = Eigen::Vector3f::Zero();  ///< axis-aligned bounds of the model
   Eigen::Vector3f max_W = Eigen::Vector3f::Zero();
-  /// Increments whenever the model changes, so caches (k-d trees) know when to rebuild.
+  /// Changes whenever the model changes, so caches (k-d trees, snapshot views) know when to
+  /// rebuild. Unique within an ObjectMap's life, also across Restore: an id that now names
+  /// another model never shows a version a cache saw before.
   std::uint64_t version = 0;
 
   /// argmax_c of the accumulated scores.
@@ -98,12 +100,13 @@ class ObjectMap {
  private:
   void AddToModel(MapObject* object, const ObjectObservation& observation,
                   const Eigen::Isometry3d& T_W_C);
-  static void UpdateBounds(MapObject* object);
+  void UpdateBounds(MapObject* object);
   void RebuildObject(MapObject* object, const KeyframePoseLookup& pose_of);
 
   ObjectMapConfig config_;
   std::map<ObjectId, MapObject> objects_;
   ObjectId next_id_ = 1;
+  std::uint64_t last_model_version_ = 0;
 };
 
 }  // namespace objmap

@@ -58,10 +58,13 @@ struct StoredObjectSummary {
 
 /// One atomic change of the store: everything a mapping step did. Applied in one transaction:
 /// either all of it is on disk when Commit returns true, or none of it. Applied in this order:
-/// keyframe, observations, merged, removed_objects, object_summaries, poses, metadata (so
-/// observations of this change follow its merges and removals).
+/// keyframe, replace_all_objects, observations, merged, removed_objects, object_summaries, poses,
+/// metadata (so observations of this change follow its merges and removals).
 struct StoreChange {
   std::optional<StoredKeyframe> keyframe;          ///< a new keyframe
+  /// Every stored observation and object summary is deleted first: `observations` and
+  /// `object_summaries` then describe all objects (a re-association regrouped them).
+  bool replace_all_objects = false;
   std::vector<StoredObservation> observations;     ///< observations to insert
   /// (kept, absorbed): every observation of `absorbed` now belongs to `kept`.
   std::vector<std::pair<ObjectId, ObjectId>> merged;

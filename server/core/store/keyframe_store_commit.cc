@@ -155,6 +155,10 @@ bool RunWithIds(Connection* db, const char* sql, const std::string& label,
 }
 
 bool ApplyObjectChanges(Connection* db, const StoreChange& change, std::string* why) {
+  if (change.replace_all_objects &&
+      !(db->Exec("DELETE FROM observations", why) && db->Exec("DELETE FROM objects", why))) {
+    return false;
+  }
   for (const StoredObservation& o : change.observations) {
     if (!InsertObservation(db, o, why)) return false;
   }
