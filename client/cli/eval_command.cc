@@ -1,13 +1,17 @@
 // `objmap eval`: a map scored against ground truth (object poses) or expected counts per class.
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <optional>
+#include <sstream>
 
 #include "arguments.h"
 #include "commands.h"
 #include "evaluation/evaluation.h"
 #include "evaluation/evaluation_io.h"
+#include "occupancy/occupancy_map.h"
 #include "types/coco_classes.h"
 #ifdef OBJMAP_CLI_WITH_SERVER
 #include "objmap/conversions.h"
@@ -24,6 +28,8 @@ constexpr char kEvalUsage[] =
     "  ADDR                      host:port of a running objmap_server (its inventory objects)\n"
     "  --gt FILE                 real objects with poses, sizes and surface samples\n"
     "  --inventory FILE          expected count per class: {\"chair\": 4, \"tv\": [1, 2]}\n"
+    "  --octomap FILE.bt         the map's OctoMap (default: map.bt in <map-dir>, or the\n"
+    "                            server's); scored when the ground truth has a seen surface\n"
     "  --json                    print the scores as JSON\n"
     "Objects are matched per class (see docs/evaluation.md); the table has per class the real\n"
     "and mapped objects, true and false positives, misses, duplicates, merges, wrong labels,\n"
@@ -68,6 +74,41 @@ bool LoadMapped(const std::string& source, std::vector<MappedObject>* mapped, st
   return false;
 }
 
+// The OctoMap's .bt bytes: --octomap, else <map-dir>/map.bt, else the server's. Empty with no
+// error when a map folder has none.
+bool LoadOctomapBytes(const std::string& source, const std::string& octomap_path,
+                      std::string* bytes, std::string* why) {
+  std::error_code error;
+  std::string path = octomap_path;
+  if (path.empty() && std::filesystem::is_directory(source, error)) {
+    path = (std::filesystem::path(source) / "map.bt").string();
+    if (!std::filesystem::exists(path, error)) return true;
+  }
+  if (!path.empty()) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) {
+      *why = path + ": cannot be opened";
+      return false;
+    }
+    std::ostringstream content;
+    content << in.rdbuf();
+    *bytes = content.str();
+    return true;
+  }
+#ifdef OBJMAP_CLI_WITH_SERVER
+  MapClient client(source);
+  v1::GetOctomapRequest request;
+  v1::GetOctomapResponse response;
+  const grpc::Status status = client.GetOctomap(request, &response);
+  if (!status.ok()) {
+    *why = source + ": " + DescribeStatus(status);
+    return false;
+  }
+  *bytes = response.bt();
+#endif
+  return true;
+}
+
 std::string Format(const char* format, double value) {
   char text[32];
   std::snprintf(text, sizeof(text), format, value);
@@ -109,11 +150,68 @@ nlohmann::ordered_json ScoresJson(const std::map<int, ClassCounts>& per_class,
   return {{"classes", classes}, {"all", CountsJson(totals)}};
 }
 
-int EvaluateWithGroundTruth(const std::vector<MappedObject>& mapped, const std::string& gt_path,
+nlohmann::ordered_json OccupancyJson(const OccupancyEvaluation& o) {
+  return {{"voxel_size_m", o.voxel_size_m},
+          {"occupied", o.occupied},
+          {"occupied_on_surface", o.occupied_on_surface},
+          {"occupied_near_surface", o.occupied_near_surface},
+          {"occupied_precision", o.OccupiedPrecision()},
+          {"structure_surface", o.structure_surface},
+          {"structure_occupied", o.structure_occupied},
+          {"structure_free", o.structure_free},
+          {"structure_completeness", o.StructureCompleteness()},
+          {"structure_free_share", o.StructureFreeShare()},
+          {"object_surface", o.object_surface},
+          {"object_free", o.object_free},
+          {"object_free_share", o.ObjectFreeShare()}};
+}
+
+void PrintOccupancy(const OccupancyEvaluation& o) {
+  std::printf(
+      "OctoMap against the seen surface (%.0f mm voxels):\n"
+      "  occupied voxels on a seen surface (within 1 voxel): %zu of %zu (%.1f %%; within 2: "
+      "%.1f %%)\n"
+      "  seen structure surface occupied (within 1 voxel):   %zu of %zu (%.1f %%)\n"
+      "  seen structure surface mapped free:                 %zu (%.2f %%)\n"
+      "  seen object surface mapped free:                    %zu of %zu (%.2f %%)\n",
+      1000.0 * o.voxel_size_m, o.occupied_on_surface, o.occupied, 100.0 * o.OccupiedPrecision(),
+      100.0 * (o.occupied == 0 ? 0.0 : static_cast<double>(o.occupied_near_surface) / o.occupied),
+      o.structure_occupied, o.structure_surface, 100.0 * o.StructureCompleteness(),
+      o.structure_free, 100.0 * o.StructureFreeShare(), o.object_free, o.object_surface,
+      100.0 * o.ObjectFreeShare());
+}
+
+// The OctoMap scored against the ground truth's seen surface; nullopt (and no error) when either
+// is missing.
+bool ScoreOccupancy(const std::string& source, const std::string& octomap_path,
+                    const std::string& gt_path, std::optional<OccupancyEvaluation>* result,
+                    std::string* why) {
+  SeenSurface surface;
+  bool present = false;
+  if (!ReadSeenSurface(gt_path, &surface, &present, why)) return false;
+  if (!present) return true;
+  std::string bytes;
+  if (!LoadOctomapBytes(source, octomap_path, &bytes, why)) return false;
+  if (bytes.empty()) return true;
+  OccupancyConfig config;
+  config.resolution_m = surface.voxel_size_m;
+  OccupancyMap map(config);
+  if (!map.ReadBinary(bytes, why)) {
+    *why = (octomap_path.empty() ? source : octomap_path) + ": " + *why;
+    return false;
+  }
+  *result = EvaluateOccupancy(map, surface);
+  return true;
+}
+
+int EvaluateWithGroundTruth(const std::vector<MappedObject>& mapped, const std::string& source,
+                            const std::string& octomap_path, const std::string& gt_path,
                             bool json) {
   std::vector<GroundTruthObject> real;
   std::string why;
-  if (!ReadGroundTruth(gt_path, &real, &why)) {
+  std::optional<OccupancyEvaluation> occupancy;
+  if (!ReadGroundTruth(gt_path, &real, &why) ||
+      !ScoreOccupancy(source, octomap_path, gt_path, &occupancy, &why)) {
     std::cerr << "objmap eval: " << why << "\n";
     return kError;
   }
@@ -129,6 +227,7 @@ int EvaluateWithGroundTruth(const std::vector<MappedObject>& mapped, const std::
     }
     document["matches"] = matches;
     document["mean_model_to_surface_m"] = evaluation.mean_model_to_surface_m;
+    if (occupancy) document["occupancy"] = OccupancyJson(*occupancy);
     std::cout << document.dump(2) << "\n";
     return kOk;
   }
@@ -138,6 +237,7 @@ int EvaluateWithGroundTruth(const std::vector<MappedObject>& mapped, const std::
                     ? std::string("n/a (no models or no surface samples)")
                     : Format("%.2f cm", 100.0 * evaluation.mean_model_to_surface_m))
             << " over " << evaluation.matches.size() << " matched objects\n";
+  if (occupancy) PrintOccupancy(*occupancy);
   return kOk;
 }
 
@@ -166,7 +266,7 @@ int EvaluateWithCounts(const std::vector<MappedObject>& mapped, const std::strin
 }  // namespace
 
 int RunEvalCommand(int argc, char** argv) {
-  Arguments args(argc, argv, {"--gt", "--inventory"}, {"--json", "--help"});
+  Arguments args(argc, argv, {"--gt", "--inventory", "--octomap"}, {"--json", "--help"});
   if (args.Has("--help")) {
     std::cout << kEvalUsage;
     return kOk;
@@ -183,8 +283,10 @@ int RunEvalCommand(int argc, char** argv) {
     return kError;
   }
   const bool json = args.Has("--json");
-  return args.Has("--gt") ? EvaluateWithGroundTruth(mapped, args.Get("--gt", ""), json)
-                          : EvaluateWithCounts(mapped, args.Get("--inventory", ""), json);
+  return args.Has("--gt")
+             ? EvaluateWithGroundTruth(mapped, args.positional()[0], args.Get("--octomap", ""),
+                                       args.Get("--gt", ""), json)
+             : EvaluateWithCounts(mapped, args.Get("--inventory", ""), json);
 }
 
 }  // namespace objmap::cli

@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "evaluation/evaluation_io.h"
+#include "occupancy/occupancy_map.h"
 #include "pointcloud_io/pointcloud_io.h"
 #include "types/coco_classes.h"
 
@@ -148,6 +149,59 @@ TEST(ScoreCounts, CountsInsideTheRangeAreRightAndTheRestMissesOrFalsePositives) 
   EXPECT_EQ(scores.at(CocoClassId("cup")).real, 0);
 }
 
+// A 61 x 61 cm wall 2 m in front of a sensor at the origin (voxel centres at (k + 0.5) cm), its
+// seen surface one point per voxel, and the cases each figure counts.
+TEST(EvaluateOccupancy, CountsSurfaceOccupiedVoxelsMissedSurfaceAndSurfaceMappedFree) {
+  OccupancyConfig config;
+  config.resolution_m = 0.01;
+  OccupancyMap map(config);
+  ScanW wall;
+  SeenSurface surface;
+  for (int iy = -30; iy <= 30; ++iy) {
+    for (int iz = -30; iz <= 30; ++iz) {
+      const Eigen::Vector3f p(2.005f, 0.01f * iy + 0.005f, 0.01f * iz + 0.005f);
+      wall.structure_points_W.push_back(p);
+      surface.structure_W.push_back(p);
+    }
+  }
+  map.Integrate(wall);
+  OccupancyEvaluation result = EvaluateOccupancy(map, surface);
+  EXPECT_EQ(result.occupied, 61u * 61u);
+  EXPECT_DOUBLE_EQ(result.OccupiedPrecision(), 1.0);
+  EXPECT_DOUBLE_EQ(result.StructureCompleteness(), 1.0);
+  EXPECT_EQ(result.structure_free, 0u);
+
+  // Five occupied voxels in the air, far from any surface.
+  ScanW spurious;
+  for (int k = 0; k < 5; ++k)
+    spurious.structure_points_W.emplace_back(1.0025f, 0.5025f, 0.5025f + 0.01f * k);
+  map.Integrate(spurious);
+  // Seen but not mapped: five voxels of wall beyond the scanned part, and one voxel on a ray
+  // to the wall (a pane the map carved through).
+  for (int k = 0; k < 5; ++k) surface.structure_W.emplace_back(2.005f, 0.405f + 0.01f * k, 0.005f);
+  surface.structure_W.emplace_back(1.0025f, 0.0025f, 0.0025f);
+  // Object surface: one voxel in carved space (free: wrong), one behind the wall (unknown).
+  surface.objects_W.emplace_back(1.5025f, 0.0025f, 0.0025f);
+  surface.objects_W.emplace_back(2.5f, 0.0f, 0.0f);
+  result = EvaluateOccupancy(map, surface);
+  EXPECT_EQ(result.occupied, 61u * 61u + 5u);
+  EXPECT_EQ(result.occupied_on_surface, 61u * 61u);
+  EXPECT_EQ(result.occupied_near_surface, 61u * 61u);
+  EXPECT_EQ(result.structure_surface, 61u * 61u + 6u);
+  EXPECT_EQ(result.structure_occupied, 61u * 61u);
+  EXPECT_EQ(result.structure_free, 1u);
+  EXPECT_EQ(result.object_surface, 2u);
+  EXPECT_EQ(result.object_free, 1u);
+  EXPECT_DOUBLE_EQ(result.ObjectFreeShare(), 0.5);
+  // A voxel two away from the surface is near it, not on it.
+  ScanW beside;
+  beside.structure_points_W.emplace_back(1.9825f, 0.0025f, 0.0025f);
+  map.Integrate(beside);
+  result = EvaluateOccupancy(map, surface);
+  EXPECT_EQ(result.occupied_on_surface, 61u * 61u);
+  EXPECT_EQ(result.occupied_near_surface, 61u * 61u + 1u);
+}
+
 class EvaluationFiles : public ::testing::Test {
  protected:
   EvaluationFiles()
@@ -192,6 +246,33 @@ TEST_F(EvaluationFiles, GroundTruthIsReadAndBadEntriesAreNamed) {
   EXPECT_NE(why.find("\"size\""), std::string::npos) << why;
   EXPECT_FALSE(ReadGroundTruth(Write("broken.json", "{\"objects\": ["), &objects, &why));
   EXPECT_NE(why.find("not valid JSON"), std::string::npos) << why;
+}
+
+TEST_F(EvaluationFiles, TheSeenSurfaceIsReadFromThePlyFilesTheGroundTruthNames) {
+  std::string why;
+  ASSERT_TRUE(WritePly((dir_ / "s.ply").string(), {{0.f, 0.f, 0.f}, {0.01f, 0.f, 0.f}}, {}, &why));
+  ASSERT_TRUE(WritePly((dir_ / "o.ply").string(), {{1.f, 0.f, 0.f}}, {}, &why));
+  SeenSurface surface;
+  bool present = false;
+  ASSERT_TRUE(ReadSeenSurface(Write("gt.json", R"({"objects": [], "seen_surface":
+        {"voxel_size_m": 0.01, "structure": "s.ply", "objects": "o.ply"}})"),
+                              &surface, &present, &why))
+      << why;
+  EXPECT_TRUE(present);
+  EXPECT_DOUBLE_EQ(surface.voxel_size_m, 0.01);
+  EXPECT_EQ(surface.structure_W.size(), 2u);
+  EXPECT_EQ(surface.objects_W.size(), 1u);
+
+  ASSERT_TRUE(ReadSeenSurface(Write("none.json", R"({"objects": []})"), &surface, &present, &why));
+  EXPECT_FALSE(present);
+  EXPECT_FALSE(ReadSeenSurface(Write("missing.json", R"({"seen_surface":
+        {"voxel_size_m": 0.01, "structure": "gone.ply", "objects": "o.ply"}})"),
+                               &surface, &present, &why));
+  EXPECT_NE(why.find("seen_surface: "), std::string::npos) << why;
+  EXPECT_NE(why.find("gone.ply"), std::string::npos) << why;
+  EXPECT_FALSE(ReadSeenSurface(Write("bad.json", R"({"seen_surface": {"structure": "s.ply"}})"),
+                               &surface, &present, &why));
+  EXPECT_NE(why.find("voxel_size_m"), std::string::npos) << why;
 }
 
 TEST_F(EvaluationFiles, ExpectedCountsTakeNumbersAndRanges) {

@@ -295,5 +295,53 @@ TEST(OccupancyMap, WriteBinaryReadsBackWithTheSameCounts) {
   EXPECT_EQ(map.Counts().occupied + map.Counts().free, 0u);
 }
 
+TEST(OccupancyMap, ReadBinaryGivesTheWrittenMapAndRefusesOtherBytes) {
+  OccupancyMap map(TestConfig());
+  map.Integrate(WallScan(2.005, 0.3));
+  const std::string bytes = map.BinaryBytes(false, Vec3d::Zero(), Vec3d::Zero(), nullptr);
+  OccupancyMap read_back(TestConfig());
+  std::string why;
+  ASSERT_TRUE(read_back.ReadBinary(bytes, &why)) << why;
+  EXPECT_EQ(read_back.Counts().occupied, map.Counts().occupied);
+  EXPECT_EQ(read_back.Counts().free, map.Counts().free);
+  EXPECT_EQ(read_back.Query({2.005, 0.0025, 0.0025}), VoxelState::kOccupied);
+
+  EXPECT_FALSE(read_back.ReadBinary("not an octree", &why));
+  EXPECT_NE(why.find("not an OctoMap binary"), std::string::npos) << why;
+  OccupancyConfig coarse = TestConfig();
+  coarse.resolution_m = 0.05;
+  OccupancyMap other(coarse);
+  EXPECT_FALSE(other.ReadBinary(bytes, &why));
+  EXPECT_NE(why.find("resolution"), std::string::npos) << why;
+  EXPECT_EQ(read_back.Counts().occupied, map.Counts().occupied) << "a refused file changes nothing";
+}
+
+TEST(OccupancyMap, OccupiedVoxelCentersAreTheOccupiedLeavesPrunedOnesExpanded) {
+  OccupancyConfig config = TestConfig();
+  config.clamping_max = 0.7;  // one hit saturates, so a solid block prunes into larger nodes
+  OccupancyMap map(config);
+  ScanW block;
+  // A 4 cm solid cube of endpoints, aligned with the grid: prunes into 2 cm nodes.
+  for (int x = 0; x < 8; ++x) {
+    for (int y = 0; y < 8; ++y) {
+      for (int z = 0; z < 8; ++z) {
+        block.structure_points_W.emplace_back(1.0025f + 0.005f * x, 0.0025f + 0.005f * y,
+                                              0.0025f + 0.005f * z);
+      }
+    }
+  }
+  map.Integrate(block);
+  const std::vector<Vec3d> centers = map.OccupiedVoxelCenters();
+  EXPECT_EQ(centers.size(), map.Counts().occupied);
+  std::set<std::tuple<int, int, int>> distinct;
+  for (const Vec3d& c : centers) {
+    EXPECT_EQ(map.Query(c), VoxelState::kOccupied);
+    distinct.emplace(std::lround(c.x() * 1000), std::lround(c.y() * 1000),
+                     std::lround(c.z() * 1000));
+  }
+  EXPECT_EQ(distinct.size(), centers.size());
+  EXPECT_GE(centers.size(), 64u) << "the 4 cm cube is 64 voxels, a few rays end inside it";
+}
+
 }  // namespace
 }  // namespace objmap

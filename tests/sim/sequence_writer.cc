@@ -1,6 +1,7 @@
 #include "sim/sequence_writer.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -9,8 +10,10 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <unordered_map>
 
 #include "detection/detections_file.h"
+#include "pointcloud_io/pointcloud_io.h"
 #include "sim/sim_random.h"
 #include "types/coco_classes.h"
 
@@ -187,7 +190,55 @@ std::vector<Detection> DetectFromInstances(const Scene& scene, const RenderedFra
   return detections;
 }
 
-std::string GroundTruthJson(const Scene& scene, int surface_points) {
+// The real surface the sensor saw: one exact (noise-free) point per voxel, first come, with its
+// rendered colour, apart for the structure and the objects.
+class SeenSurface {
+ public:
+  explicit SeenSurface(double voxel_m) : voxel_m_(voxel_m) {}
+
+  void Add(const RenderedFrame& frame, const Eigen::Isometry3d& T_W_C, const CameraIntrinsics& K,
+           double max_range_m) {
+    const Eigen::Isometry3f T = T_W_C.cast<float>();
+    for (int v = 0; v < K.height; ++v) {
+      for (int u = 0; u < K.width; ++u) {
+        const std::size_t i = static_cast<std::size_t>(v) * K.width + u;
+        const float z = frame.true_depth_m[i];
+        // Seen: the sensor returned depth there (not dropped as grazing, at an edge or out of
+        // range), and near enough for the map to mark it.
+        if (frame.depth.depth_m[i] <= 0.f || z <= 0.f || z > max_range_m) continue;
+        const Eigen::Vector3f p_W =
+            T * Eigen::Vector3f(static_cast<float>((u - K.cx) / K.fx * z),
+                                static_cast<float>((v - K.cy) / K.fy * z), z);
+        Part& part = frame.instance[i] == 0 ? structure_ : objects_;
+        const Eigen::Vector3i cell = (p_W.cast<double>() / voxel_m_).array().floor().cast<int>();
+        const std::int64_t key = (std::int64_t{cell.x() + (1 << 20)} << 42) |
+                                 (std::int64_t{cell.y() + (1 << 20)} << 21) |
+                                 std::int64_t{cell.z() + (1 << 20)};
+        if (!part.index.emplace(key, part.points.size()).second) continue;
+        part.points.push_back(p_W);
+        part.colors.push_back(
+            {frame.color.rgb[3 * i], frame.color.rgb[3 * i + 1], frame.color.rgb[3 * i + 2]});
+      }
+    }
+  }
+
+  bool Write(const std::string& structure_path, const std::string& objects_path,
+             std::string* why) const {
+    return WritePly(structure_path, structure_.points, structure_.colors, why) &&
+           WritePly(objects_path, objects_.points, objects_.colors, why);
+  }
+
+ private:
+  struct Part {
+    std::unordered_map<std::int64_t, std::size_t> index;
+    std::vector<Eigen::Vector3f> points;
+    std::vector<std::array<std::uint8_t, 3>> colors;
+  };
+  double voxel_m_;
+  Part structure_, objects_;
+};
+
+std::string GroundTruthJson(const Scene& scene, int surface_points, double seen_voxel_m) {
   nlohmann::ordered_json objects = nlohmann::ordered_json::array();
   for (const SceneObject& object : scene.objects) {
     Eigen::Isometry3d T_W_B;
@@ -211,7 +262,13 @@ std::string GroundTruthJson(const Scene& scene, int surface_points) {
                        {"size", {size.x(), size.y(), size.z()}},
                        {"surface_sample", samples}});
   }
-  return nlohmann::ordered_json{{"kind", scene.kind}, {"seed", scene.seed}, {"objects", objects}}
+  return nlohmann::ordered_json{{"kind", scene.kind},
+                                {"seed", scene.seed},
+                                {"objects", objects},
+                                {"seen_surface",
+                                 {{"voxel_size_m", seen_voxel_m},
+                                  {"structure", "seen_structure.ply"},
+                                  {"objects", "seen_objects.ply"}}}}
       .dump(1);
 }
 
@@ -219,6 +276,10 @@ bool WriteSequence(const Scene& scene, const SequenceOptions& options, const std
                    std::string* why) {
   if (!options.depth_noise.IsValid(why) || !options.detector.IsValid(why) ||
       !options.drift.IsValid(why)) {
+    return false;
+  }
+  if (!(options.seen_voxel_m > 0.0) || !(options.seen_max_range_m > 0.0)) {
+    *why = "SequenceOptions: seen_voxel_m and seen_max_range_m must be > 0";
     return false;
   }
   // What the tracker reports; the frames are rendered from the true poses.
@@ -239,6 +300,7 @@ bool WriteSequence(const Scene& scene, const SequenceOptions& options, const std
     return false;
   }
   DetectionsByFrame detections;
+  SeenSurface seen(options.seen_voxel_m);
   for (std::size_t f = 0; f < scene.trajectory.size(); ++f) {
     const int index = static_cast<int>(f);
     const Eigen::Isometry3d& T_W_C = scene.trajectory[f];
@@ -263,6 +325,11 @@ bool WriteSequence(const Scene& scene, const SequenceOptions& options, const std
     }
     detections[std::to_string(index)] =
         DetectFromInstances(scene, frame, T_W_C, options.detector, scene.seed, index);
+    seen.Add(frame, T_W_C, K, options.seen_max_range_m);
+  }
+  if (!seen.Write((fs::path(dir) / "seen_structure.ply").string(),
+                  (fs::path(dir) / "seen_objects.ply").string(), why)) {
+    return false;
   }
   if (!WriteDetectionsFile((fs::path(dir) / "detections.json").string(), detections, why)) {
     return false;
@@ -286,7 +353,7 @@ bool WriteSequence(const Scene& scene, const SequenceOptions& options, const std
   }
   const std::string gt_path = (fs::path(dir) / "ground_truth.json").string();
   std::ofstream gt(gt_path);
-  gt << GroundTruthJson(scene, options.surface_points) << "\n";
+  gt << GroundTruthJson(scene, options.surface_points, options.seen_voxel_m) << "\n";
   if (!gt) {
     *why = gt_path + ": write failed";
     return false;

@@ -70,6 +70,11 @@ struct SequenceOptions {
   DetectorNoiseConfig detector;
   DriftConfig drift;
   int surface_points = 2000;  ///< per object in ground_truth.json
+  /// The seen surface (seen_structure.ply, seen_objects.ply) keeps one exact surface point per
+  /// voxel of this size that the sensor returned depth for within seen_max_range_m: what the
+  /// OctoMap (1 cm, 4 m range by default) is scored against.
+  double seen_voxel_m = 0.01;
+  double seen_max_range_m = 4.0;
 };
 
 /// Renders every pose of the scene's trajectory into `dir` (created when missing). False with

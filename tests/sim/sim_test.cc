@@ -8,6 +8,7 @@
 #include <fstream>
 #include <map>
 #include <set>
+#include <tuple>
 
 #include "dataset/sequence_reader.h"
 #include "detection/detections_file.h"
@@ -347,6 +348,43 @@ TEST(SimSequence, AWrittenSequenceReadsBackWithItsGroundTruthAndDetections) {
   DetectionsByFrame detections;
   ASSERT_TRUE(ReadDetectionsFile((dir / "detections.json").string(), &detections, &why)) << why;
   EXPECT_GT(detections.size(), 0u);
+
+  // The seen surface: one exact point per 1 cm voxel, and every pixel the sensor returned
+  // (within 4 m) lies in one of its voxels, of the structure or of the objects as it is.
+  SeenSurface seen;
+  bool present = false;
+  ASSERT_TRUE(ReadSeenSurface((dir / "ground_truth.json").string(), &seen, &present, &why)) << why;
+  ASSERT_TRUE(present);
+  ASSERT_GT(seen.structure_W.size(), 1000u);
+  ASSERT_GT(seen.objects_W.size(), 100u);
+  auto voxels_of = [](const std::vector<Eigen::Vector3f>& points) {
+    std::set<std::tuple<int, int, int>> voxels;
+    for (const Eigen::Vector3f& p : points) {
+      voxels.emplace(std::floor(p.x() / 0.01), std::floor(p.y() / 0.01), std::floor(p.z() / 0.01));
+    }
+    return voxels;
+  };
+  const auto structure_voxels = voxels_of(seen.structure_W);
+  const auto object_voxels = voxels_of(seen.objects_W);
+  EXPECT_EQ(structure_voxels.size(), seen.structure_W.size());
+  EXPECT_EQ(object_voxels.size(), seen.objects_W.size());
+  const CameraIntrinsics& K = scene.intrinsics;
+  const Eigen::Isometry3f T_W_C = scene.trajectory[1].cast<float>();
+  int checked = 0;
+  for (std::size_t i = 0; i < rendered.true_depth_m.size(); i += 101) {
+    const float z = rendered.true_depth_m[i];
+    if (rendered.depth.depth_m[i] <= 0.f || z > 4.f) continue;
+    const int u = static_cast<int>(i % K.width), v = static_cast<int>(i / K.width);
+    // As the writer computes it, so both land in the same voxel to the last bit.
+    const Eigen::Vector3f p = T_W_C * Eigen::Vector3f(static_cast<float>((u - K.cx) / K.fx * z),
+                                                      static_cast<float>((v - K.cy) / K.fy * z), z);
+    const std::tuple<int, int, int> voxel(std::floor(p.x() / 0.01), std::floor(p.y() / 0.01),
+                                          std::floor(p.z() / 0.01));
+    EXPECT_EQ((rendered.instance[i] == 0 ? structure_voxels : object_voxels).count(voxel), 1u)
+        << "pixel " << u << "," << v;
+    ++checked;
+  }
+  EXPECT_GT(checked, 1000);
   fs::remove_all(dir);
 }
 

@@ -13,6 +13,8 @@
 
 namespace objmap {
 
+class OccupancyMap;
+
 /// A real object: its class, an oriented box (pose of the box centre, full extents along the
 /// box axes) and points sampled on its surface (may be empty: no model accuracy then).
 struct GroundTruthObject {
@@ -89,6 +91,42 @@ struct ObjectEvaluation {
 [[nodiscard]] ObjectEvaluation EvaluateObjects(const std::vector<GroundTruthObject>& real,
                                                const std::vector<MappedObject>& mapped,
                                                const EvaluationConfig& config);
+
+/// The real surface a sequence's sensor saw (ground_truth.json "seen_surface"): exact surface
+/// points, at most one per voxel of the map resolution, of the structure and of the objects.
+struct SeenSurface {
+  double voxel_size_m = 0.01;
+  std::vector<Eigen::Vector3f> structure_W;
+  std::vector<Eigen::Vector3f> objects_W;
+};
+
+/// The OctoMap against the seen surface, voxel by voxel at the map resolution. "Within one
+/// voxel": the voxel or one of its 26 neighbours.
+struct OccupancyEvaluation {
+  double voxel_size_m = 0.0;
+  std::size_t occupied = 0;               ///< occupied voxels of the map
+  std::size_t occupied_on_surface = 0;    ///< ... within one voxel of a seen surface voxel
+  std::size_t occupied_near_surface = 0;  ///< ... within two voxels
+  std::size_t structure_surface = 0;      ///< seen structure surface voxels
+  std::size_t structure_occupied = 0;     ///< ... with an occupied voxel within one voxel
+  std::size_t structure_free = 0;         ///< ... whose own voxel the map calls free
+  std::size_t object_surface = 0;         ///< seen object surface voxels
+  std::size_t object_free = 0;            ///< ... whose own voxel the map calls free
+
+  /// occupied_on_surface / occupied: how much of what the map calls occupied is real surface.
+  [[nodiscard]] double OccupiedPrecision() const;
+  /// structure_occupied / structure_surface: how much of the seen structure the map holds.
+  [[nodiscard]] double StructureCompleteness() const;
+  /// structure_free / structure_surface and object_free / object_surface: seen surface that a
+  /// planner trusting the OctoMap would take for air (objects are kept out of the OctoMap, and
+  /// should be unknown there, not free).
+  [[nodiscard]] double StructureFreeShare() const;
+  [[nodiscard]] double ObjectFreeShare() const;
+};
+
+/// Scores `map` against `surface` (the map's resolution must be the surface's voxel size).
+[[nodiscard]] OccupancyEvaluation EvaluateOccupancy(const OccupancyMap& map,
+                                                    const SeenSurface& surface);
 
 /// Expected count of a class for data without object poses: between min and max (inclusive).
 struct CountRange {

@@ -169,6 +169,35 @@ bool ReadGroundTruth(const std::string& path, std::vector<GroundTruthObject>* ob
   return true;
 }
 
+bool ReadSeenSurface(const std::string& ground_truth_path, SeenSurface* surface, bool* present,
+                     std::string* why) {
+  *present = false;
+  Json document;
+  if (!ParseFile(ground_truth_path, &document, why)) return false;
+  if (!document.is_object() || !document.contains("seen_surface")) return true;
+  const Json& entry = document["seen_surface"];
+  const std::string where = ground_truth_path + ": seen_surface";
+  if (!entry.is_object() || !entry.contains("voxel_size_m") || !entry["voxel_size_m"].is_number() ||
+      !(entry["voxel_size_m"].get<double>() > 0.0) || !entry.contains("structure") ||
+      !entry["structure"].is_string() || !entry.contains("objects") ||
+      !entry["objects"].is_string()) {
+    *why = where + ": needs \"voxel_size_m\" (> 0), \"structure\" and \"objects\" (PLY paths)";
+    return false;
+  }
+  surface->voxel_size_m = entry["voxel_size_m"].get<double>();
+  const fs::path dir = fs::path(ground_truth_path).parent_path();
+  std::vector<std::array<std::uint8_t, 3>> colors;
+  if (!ReadPly((dir / entry["structure"].get<std::string>()).string(), &surface->structure_W,
+               &colors, why) ||
+      !ReadPly((dir / entry["objects"].get<std::string>()).string(), &surface->objects_W, &colors,
+               why)) {
+    *why = where + ": " + *why;
+    return false;
+  }
+  *present = true;
+  return true;
+}
+
 bool ReadExpectedCounts(const std::string& path, std::map<int, CountRange>* counts,
                         std::string* why) {
   counts->clear();

@@ -19,6 +19,12 @@ namespace objmap {
 [[nodiscard]] bool ReadGroundTruth(const std::string& path, std::vector<GroundTruthObject>* objects,
                                    std::string* why);
 
+/// The seen surface a ground-truth file names: {"seen_surface": {"voxel_size_m": 0.01,
+/// "structure": "seen_structure.ply", "objects": "seen_objects.ply"}} (paths relative to the
+/// file). `*present` is false, and the call true, when the file names none.
+[[nodiscard]] bool ReadSeenSurface(const std::string& ground_truth_path, SeenSurface* surface,
+                                   bool* present, std::string* why);
+
 /// Expected counts per class, for data without object poses: {"chair": 4, "tv": [1, 2], ...}
 /// (a number, or an inclusive [min, max] range).
 [[nodiscard]] bool ReadExpectedCounts(const std::string& path, std::map<int, CountRange>* counts,

@@ -278,6 +278,44 @@ bool OccupancyMap::WriteBinary(const std::string& path, std::string* why) const 
   return false;
 }
 
+bool OccupancyMap::ReadBinary(const std::string& bytes, std::string* why) {
+  // Read aside first: readBinary takes the file's resolution, and a refused file must leave the
+  // map as it was.
+  octomap::OcTree probe(impl_->config.resolution_m);
+  std::istringstream probe_stream(bytes);
+  if (!probe.readBinary(probe_stream)) {
+    *why = "not an OctoMap binary (.bt) file";
+    return false;
+  }
+  if (std::abs(probe.getResolution() - impl_->config.resolution_m) > 1e-9) {
+    *why = "the OctoMap's resolution is " + std::to_string(probe.getResolution()) +
+           " m, this map's " + std::to_string(impl_->config.resolution_m) + " m";
+    return false;
+  }
+  std::istringstream stream(bytes);
+  impl_->tree.clear();
+  return impl_->tree.readBinary(stream);
+}
+
+std::vector<Eigen::Vector3d> OccupancyMap::OccupiedVoxelCenters() const {
+  std::vector<Eigen::Vector3d> centers;
+  const double leaf = impl_->config.resolution_m;
+  for (auto it = impl_->tree.begin_leafs(), end = impl_->tree.end_leafs(); it != end; ++it) {
+    if (!impl_->tree.isNodeOccupied(*it)) continue;
+    const int per_side = static_cast<int>(std::lround(it.getSize() / leaf));
+    const Eigen::Vector3d corner = Eigen::Vector3d(it.getX(), it.getY(), it.getZ()) -
+                                   Eigen::Vector3d::Constant(it.getSize() / 2);
+    for (int x = 0; x < per_side; ++x) {
+      for (int y = 0; y < per_side; ++y) {
+        for (int z = 0; z < per_side; ++z) {
+          centers.push_back(corner + leaf * Eigen::Vector3d(x + 0.5, y + 0.5, z + 0.5));
+        }
+      }
+    }
+  }
+  return centers;
+}
+
 void OccupancyMap::Clear() { impl_->tree.clear(); }
 
 const OccupancyConfig& OccupancyMap::config() const { return impl_->config; }

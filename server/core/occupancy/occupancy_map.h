@@ -144,6 +144,13 @@ class OccupancyMap {
 
   /// Writes the map as a standard OctoMap binary file (.bt, opens in octovis).
   [[nodiscard]] bool WriteBinary(const std::string& path, std::string* why) const;
+  /// Replaces the OcTree by the contents of an OctoMap binary file (.bt bytes, as WriteBinary
+  /// and BinaryBytes write them). False with a reason, and the map unchanged, when the bytes are
+  /// not such a file or its resolution is not this map's.
+  [[nodiscard]] bool ReadBinary(const std::string& bytes, std::string* why);
+
+  /// Centres of the occupied voxels at the map resolution (pruned occupied nodes are expanded).
+  [[nodiscard]] std::vector<Eigen::Vector3d> OccupiedVoxelCenters() const;
 
   void Clear();
   [[nodiscard]] const OccupancyConfig& config() const;
