@@ -15,6 +15,7 @@ void VisitMapper(MapperConfig* m, Visitor& v) {
   v("surface_classes", &m->surface_classes);
   v("flat_classes", &m->flat_classes);
   v("flat_box_shrink_fraction", &m->flat_box_shrink_fraction);
+  v("split_max_box_iou", &m->split_max_box_iou);
   SegmenterConfig& s = m->segmenter;
   v.Section("segmenter");
   v("depth_jump_ratio", &s.depth_jump_ratio);
@@ -62,6 +63,8 @@ void VisitMapModel(MapperConfig* m, Visitor& v) {
   v("clamping_min", &o.clamping_min);
   v("clamping_max", &o.clamping_max);
   v("object_margin_voxels", &o.object_margin_voxels);
+  v("structure_margin_m", &o.structure_margin_m);
+  v("structure_margin_per_m2", &o.structure_margin_per_m2);
   v("one_ray_per_end_voxel", &o.one_ray_per_end_voxel);
   InventoryConfig& i = m->inventory;
   v.Section("inventory");

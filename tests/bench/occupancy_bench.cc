@@ -141,6 +141,9 @@ int main(int argc, char** argv) {
   }
   objmap::OccupancyConfig config;
   config.max_range_m = args.max_range_m;
+  // Stock carving, so that the map is comparable voxel for voxel with insertPointCloud.
+  config.structure_margin_m = 0.0;
+  config.structure_margin_per_m2 = 0.0;
   config.one_ray_per_end_voxel = args.one_ray_per_end_voxel;
   objmap::OccupancyMap map(config);
   octomap::OcTree stock(config.resolution_m);

@@ -17,10 +17,13 @@ namespace {
 
 using Vec3d = Eigen::Vector3d;
 
+// Stock OctoMap semantics, which most tests here pin down: rays carve up to their endpoint.
 OccupancyConfig TestConfig() {
   OccupancyConfig config;
   config.resolution_m = 0.01;
   config.max_range_m = 4.0;
+  config.structure_margin_m = 0.0;
+  config.structure_margin_per_m2 = 0.0;
   return config;
 }
 
@@ -46,6 +49,10 @@ TEST(OccupancyConfig, IsValidNamesTheBadField) {
   config.probability_miss = 0.7;
   EXPECT_FALSE(config.IsValid(&why));
   EXPECT_NE(why.find("probability_miss"), std::string::npos);
+  config = OccupancyConfig{};
+  config.structure_margin_per_m2 = -0.1;
+  EXPECT_FALSE(config.IsValid(&why));
+  EXPECT_NE(why.find("structure_margin"), std::string::npos);
   config = OccupancyConfig{};
   config.object_margin_voxels = -1;
   EXPECT_FALSE(config.IsValid(&why));
@@ -87,6 +94,47 @@ TEST(OccupancyMap, WallIsOccupiedAndTheSpaceBeforeItFree) {
   }
   EXPECT_EQ(map.Counts().occupied, wall_voxels.size());
   EXPECT_GT(map.Counts().free, 100000u);
+}
+
+// A wall 2 m away seen four times with depth noise: each time three of four points lie 1.5 cm
+// behind it (a quantization step can do that to a whole patch). Carving up to those endpoints
+// erases the wall voxels the other points marked; rays that stop short by the noise margin
+// leave the wall whole and still carve the space before it.
+TEST(OccupancyMap, TheStructureMarginKeepsNoisySurfacesFromBeingCarved) {
+  auto noisy_wall = [](int shift) {
+    ScanW scan;
+    for (int iy = -20; iy < 20; ++iy) {
+      for (int iz = -20; iz < 20; ++iz) {
+        const bool behind = ((iy + iz + 40 + shift) % 4) != 0;
+        scan.structure_points_W.emplace_back(2.005f + (behind ? 0.015f : 0.f), 0.01f * iy + 0.005f,
+                                             0.01f * iz + 0.005f);
+      }
+    }
+    return scan;
+  };
+  auto wall_voxels_occupied = [](const OccupancyMap& map) {
+    int occupied = 0;
+    for (int iy = -20; iy < 20; ++iy) {
+      for (int iz = -20; iz < 20; ++iz) {
+        occupied +=
+            map.Query({2.005, 0.01 * iy + 0.005, 0.01 * iz + 0.005}) == VoxelState::kOccupied;
+      }
+    }
+    return occupied;
+  };
+  OccupancyMap stock(TestConfig());
+  OccupancyConfig with_margin_config = TestConfig();
+  with_margin_config.structure_margin_m = 0.01;
+  with_margin_config.structure_margin_per_m2 = 0.005;  // 3 cm at 2 m
+  OccupancyMap with_margin(with_margin_config);
+  for (int shift = 0; shift < 4; ++shift) {
+    stock.Integrate(noisy_wall(shift));
+    with_margin.Integrate(noisy_wall(shift));
+  }
+  EXPECT_EQ(wall_voxels_occupied(with_margin), 1600);
+  EXPECT_LT(wall_voxels_occupied(stock), 1600) << "carved by the rays to the points behind";
+  EXPECT_EQ(with_margin.Query({1.9, 0.005, 0.005}), VoxelState::kFree);
+  EXPECT_EQ(with_margin.Query({1.985, 0.005, 0.005}), VoxelState::kUnknown) << "inside the margin";
 }
 
 TEST(OccupancyMap, PreparedScanLeavesTheTreeAloneUntilApplied) {

@@ -4,6 +4,7 @@
 #include <pcl/point_types.h>
 
 #include <algorithm>
+#include <iterator>
 #include <unordered_map>
 
 namespace objmap {
@@ -26,6 +27,15 @@ float BoundingRadius(const std::vector<Eigen::Vector3f>& points, const Eigen::Ve
   for (const Eigen::Vector3f& p : points)
     radius_sq = std::max(radius_sq, (p - centre).squaredNorm());
   return std::sqrt(radius_sq);
+}
+
+// Two objects observed in one keyframe were two detections with segments of their own there:
+// things seen apart at the same moment are not one thing, however close (two mugs touching).
+bool SeenTogether(const MapObject& a, const MapObject& b) {
+  const std::vector<KeyframeId> ka = a.Keyframes(), kb = b.Keyframes();
+  std::vector<KeyframeId> common;
+  std::set_intersection(ka.begin(), ka.end(), kb.begin(), kb.end(), std::back_inserter(common));
+  return !common.empty();
 }
 
 float ObjectRadius(const MapObject& object) {
@@ -166,6 +176,7 @@ std::vector<std::pair<ObjectId, ObjectId>> Associator::FindDuplicates(
       const MapObject& other = *map.Find(other_id);
       if (other_id == id || other.Label() != object->Label()) continue;
       if (std::find(absorbed.begin(), absorbed.end(), other_id) != absorbed.end()) continue;
+      if (SeenTogether(*object, other)) continue;
       // Test the smaller model against the larger one: a partial view of an object is a
       // duplicate of the whole even though the whole is not a duplicate of the part.
       const bool object_smaller = object->model_W.size() <= other.model_W.size();

@@ -70,7 +70,8 @@ class Associator {
       const ObjectMap& map, const std::vector<SegmentToAssociate>& segments);
 
   /// Pairs of objects (kept, absorbed) among `ids` and their neighbours that describe the same
-  /// thing: same label, and most of the smaller model lies within match distance of the larger.
+  /// thing: same label, most of the smaller model lies within duplicate distance of the larger,
+  /// and no keyframe observed both (objects seen apart at one moment are two objects).
   [[nodiscard]] std::vector<std::pair<ObjectId, ObjectId>> FindDuplicates(
       const ObjectMap& map, const std::vector<ObjectId>& ids);
 

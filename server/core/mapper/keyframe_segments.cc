@@ -127,6 +127,36 @@ float ClaimedFraction(const std::vector<int>& pixels, const std::unordered_set<i
   return static_cast<float>(hits) / static_cast<float>(pixels.size());
 }
 
+float BoxIou(const BoundingBox2D& a, const BoundingBox2D& b) {
+  const float w = std::min(a.x_max, b.x_max) - std::max(a.x_min, b.x_min);
+  const float h = std::min(a.y_max, b.y_max) - std::max(a.y_min, b.y_min);
+  if (w <= 0.f || h <= 0.f) return 0.f;
+  const float intersection = w * h;
+  return intersection / (a.Area() + b.Area() - intersection);
+}
+
+// How far (u, v) lies from the box centre, in half-extents (< 1 inside the box).
+float BoxDistance(const BoundingBox2D& box, int u, int v) {
+  const float half_w = std::max(0.5f, 0.5f * box.Width());
+  const float half_h = std::max(0.5f, 0.5f * box.Height());
+  return std::max(std::abs(u - 0.5f * (box.x_min + box.x_max)) / half_w,
+                  std::abs(v - 0.5f * (box.y_min + box.y_max)) / half_h);
+}
+
+// The pixels of two same-class detections that picked one segment (two cups touching, a stack
+// of books), shared out: a pixel in one box only goes to it, any other to the box whose centre is
+// nearer in units of the box's half-size.
+void SplitBetweenBoxes(const std::vector<int>& pixels, int width, const BoundingBox2D& box_a,
+                       const BoundingBox2D& box_b, std::vector<int>* pixels_a,
+                       std::vector<int>* pixels_b) {
+  for (int i : pixels) {
+    const int u = i % width, v = i / width;
+    const bool in_a = Inside(box_a, u, v), in_b = Inside(box_b, u, v);
+    const bool to_a = in_a != in_b ? in_a : BoxDistance(box_a, u, v) <= BoxDistance(box_b, u, v);
+    (to_a ? pixels_a : pixels_b)->push_back(i);
+  }
+}
+
 void AddClassScore(ObjectObservation* observation, int class_id, float score) {
   for (auto& [existing_class, existing_score] : observation->class_scores) {
     if (existing_class == class_id) {
@@ -156,6 +186,20 @@ std::vector<SegmentedDetection> SegmentDetections(
                    [&](int a, int b) { return detections[a].score > detections[b].score; });
   std::vector<SegmentedDetection> segmented;
   std::vector<std::unordered_set<int>> claimed;
+  std::vector<BoundingBox2D> depth_boxes;  // of each entry, in depth pixels
+  auto make_entry = [&](const Detection& detection, const std::vector<int>& pixels,
+                        SegmentedDetection* entry) {
+    entry->observation.segment_C =
+        SegmentPoints(cloud_C, pixels, config.objects.model_voxel_size_m);
+    if (static_cast<int>(entry->observation.segment_C.size()) < config.min_segment_points) {
+      return false;
+    }
+    entry->observation.keyframe_id = keyframe_id;
+    entry->observation.box = detection.box;
+    entry->observation.class_scores = {{detection.class_id, detection.score}};
+    entry->pixels = pixels;
+    return true;
+  };
   for (int d : order) {
     const Detection& detection = detections[d];
     if (detection.score < config.min_detection_score || detection.box.Area() <= 0.f) continue;
@@ -164,22 +208,44 @@ std::vector<SegmentedDetection> SegmentDetections(
         CropToBox(DetectionPixels(segmentation, cloud_C, box, detection.class_id, config), box,
                   segmentation.width, config.detection_segment);
     if (pixels.empty()) continue;
-    bool fused = false;
-    for (std::size_t k = 0; k < segmented.size() && !fused; ++k) {
-      if (ClaimedFraction(pixels, claimed[k]) >= 0.5f) {
-        AddClassScore(&segmented[k].observation, detection.class_id, detection.score);
-        fused = true;
+    bool handled = false;
+    for (std::size_t k = 0; k < segmented.size() && !handled; ++k) {
+      if (ClaimedFraction(pixels, claimed[k]) < 0.5f) continue;
+      ObjectObservation& earlier = segmented[k].observation;
+      // What lies on a table is not the table, though its pixels are part of the table's plane
+      // (a flat keyboard within the plane's depth noise).
+      if (Contains(config.surface_classes, earlier.class_scores.front().first) &&
+          !Contains(config.surface_classes, detection.class_id)) {
+        continue;
       }
+      handled = true;
+      if (earlier.class_scores.front().first == detection.class_id &&
+          BoxIou(depth_boxes[k], box) < config.split_max_box_iou) {
+        std::vector<int> joined = segmented[k].pixels;
+        for (int i : pixels) {
+          if (claimed[k].count(i) == 0) joined.push_back(i);
+        }
+        std::vector<int> pixels_k, pixels_d;
+        SplitBetweenBoxes(joined, segmentation.width, depth_boxes[k], box, &pixels_k, &pixels_d);
+        SegmentedDetection kept, added;
+        if (make_entry(detection, pixels_d, &added) && make_entry(detection, pixels_k, &kept)) {
+          kept.observation.box = earlier.box;
+          kept.observation.class_scores = earlier.class_scores;
+          segmented[k] = std::move(kept);
+          claimed[k] = std::unordered_set<int>(pixels_k.begin(), pixels_k.end());
+          claimed.emplace_back(pixels_d.begin(), pixels_d.end());
+          depth_boxes.push_back(box);
+          segmented.push_back(std::move(added));
+          continue;
+        }
+      }
+      AddClassScore(&earlier, detection.class_id, detection.score);
     }
-    if (fused) continue;
+    if (handled) continue;
     SegmentedDetection entry;
-    entry.observation.segment_C = SegmentPoints(cloud_C, pixels, config.objects.model_voxel_size_m);
-    if (static_cast<int>(entry.observation.segment_C.size()) < config.min_segment_points) continue;
-    entry.observation.keyframe_id = keyframe_id;
-    entry.observation.box = detection.box;
-    entry.observation.class_scores = {{detection.class_id, detection.score}};
+    if (!make_entry(detection, pixels, &entry)) continue;
     claimed.emplace_back(pixels.begin(), pixels.end());
-    entry.pixels = pixels;
+    depth_boxes.push_back(box);
     segmented.push_back(std::move(entry));
   }
   return segmented;

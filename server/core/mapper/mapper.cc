@@ -177,6 +177,10 @@ bool MapperConfig::IsValid(std::string* why) const {
     *why = "MapperConfig.min_segment_points must be >= 1";
     return false;
   }
+  if (!(split_max_box_iou >= 0.f && split_max_box_iou <= 1.f)) {
+    *why = "MapperConfig.split_max_box_iou must be in [0, 1]";
+    return false;
+  }
   if (!(flat_box_shrink_fraction >= 0.f && flat_box_shrink_fraction < 0.5f)) {
     *why = "MapperConfig.flat_box_shrink_fraction must be in [0, 0.5)";
     return false;

@@ -73,6 +73,11 @@ struct MapperConfig {
   /// are left out: their spurious detections would turn patches of a table into objects.
   std::vector<int> flat_classes = {62 /* tv */, 63 /* laptop */, 66 /* keyboard */, 71 /* sink */,
                                    74 /* clock */};
+  /// Two detections of one class whose boxes overlap by less than this IoU but pick the same
+  /// segment (two cups touching, books in a stack: one convex segment) share it out between
+  /// their boxes and stay two observations. 0: the later one only adds its score to the first
+  /// (the paper's one segment, one object).
+  float split_max_box_iou = 0.3f;
   /// Flat-object boxes shrink by this fraction of their size on every side before cropping the
   /// plane (colour and depth are not registered, so box borders are unreliable).
   float flat_box_shrink_fraction = 0.1f;

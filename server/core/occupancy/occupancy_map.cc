@@ -71,6 +71,9 @@ bool OccupancyConfig::IsValid(std::string* why) const {
     return fail("clamping_min/clamping_max must lie in (0, 1) with clamping_min < clamping_max");
   }
   if (object_margin_voxels < 0) return fail("object_margin_voxels must be >= 0");
+  if (!(structure_margin_m >= 0.0) || !(structure_margin_per_m2 >= 0.0)) {
+    return fail("structure_margin_m and structure_margin_per_m2 must be >= 0");
+  }
   return true;
 }
 
@@ -80,12 +83,25 @@ void OccupancyMap::Impl::CollectRays(const ScanW& scan) {
   occupied_keys.clear();
   const Eigen::Vector3f& origin = scan.origin_W;
   const float margin_m = static_cast<float>(config.object_margin_voxels * config.resolution_m);
+  const bool structure_margin =
+      config.structure_margin_m > 0.0 || config.structure_margin_per_m2 > 0.0;
+  auto StructureMargin = [this](float range_m) {
+    return static_cast<float>(config.structure_margin_m +
+                              config.structure_margin_per_m2 * range_m * range_m);
+  };
   for (const Eigen::Vector3f& p : scan.structure_points_W) {
     if (!AllFinite(p)) continue;
-    const RayEnd ray = ClipRay(origin, p, config.max_range_m);
+    RayEnd ray = ClipRay(origin, p, config.max_range_m);
     VoxelKey key;
     if (ray.in_range && PointToKey(p, config.resolution_m, &key)) {
       occupied_keys.push_back(PackKey(key));
+    }
+    if (ray.in_range && structure_margin) {
+      const Eigen::Vector3f d = p - origin;
+      const float length = d.norm();
+      const float margin = StructureMargin(length);
+      if (length <= margin) continue;
+      ray.end_W = p - d * (margin / length);
     }
     ray_ends_W.push_back(ray.end_W);
   }
@@ -93,11 +109,13 @@ void OccupancyMap::Impl::CollectRays(const ScanW& scan) {
     if (!AllFinite(p)) continue;
     RayEnd ray = ClipRay(origin, p, config.max_range_m);
     if (ray.in_range) {
-      // Stop short of the object surface so it does not erase the structure it touches.
+      // Stop short of the object surface so it does not erase the structure it touches, nor,
+      // where depth noise put the point behind it, the object's own surface.
       const Eigen::Vector3f d = p - origin;
       const float length = d.norm();
-      if (length <= margin_m) continue;
-      ray.end_W = p - d * (margin_m / length);
+      const float margin = std::max(margin_m, StructureMargin(length));
+      if (length <= margin) continue;
+      ray.end_W = p - d * (margin / length);
     }
     ray_ends_W.push_back(ray.end_W);
   }

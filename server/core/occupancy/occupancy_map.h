@@ -22,6 +22,13 @@ struct OccupancyConfig {
   /// Object rays stop this many voxels short of the object point, so object surfaces do not
   /// carve the structure they rest on.
   int object_margin_voxels = 2;
+  /// Structure rays stop carving free space short of their endpoint by structure_margin_m +
+  /// structure_margin_per_m2 * range^2 (the endpoint is still marked occupied). Depth noise puts
+  /// about half of the endpoints behind the true surface (sigma and quantization steps of
+  /// structured-light and stereo sensors grow with range squared), and a ray carved up to such an
+  /// endpoint erases the surface voxel that other rays marked. 0 and 0: stock OctoMap.
+  double structure_margin_m = 0.01;
+  double structure_margin_per_m2 = 0.005;
   /// Approximation for speed: cast one free-space ray per distinct end voxel (to the first point
   /// in it) instead of one per point. Off: the result equals stock insertPointCloud exactly.
   bool one_ray_per_end_voxel = false;
