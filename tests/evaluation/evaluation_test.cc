@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -91,6 +92,39 @@ TEST(EvaluateObjects, CountsDuplicatesMergesMissesAndWrongLabels) {
   EXPECT_DOUBLE_EQ(all.Precision(), 2.0 / 5.0);
   EXPECT_DOUBLE_EQ(all.Recall(), 2.0 / 5.0);
   ASSERT_EQ(evaluation.matches.size(), 2u);
+}
+
+// With models, a merge is a model lying substantially on two real objects: two mugs 2 cm apart,
+// one model half on each is a merge; a model of one mug with a tenth of its points on the rim
+// of the other is not, though its axis-aligned box holds most of both mugs' boxes.
+TEST(EvaluateObjects, AModelOnTwoObjectsIsAMergeAModelWithAStrayRimIsNot) {
+  const Eigen::Vector3d cup_size(0.08, 0.08, 0.1);
+  const std::vector<GroundTruthObject> real = {Real(1, "cup", {0, 0, 0.05}, cup_size),
+                                               Real(2, "cup", {0.1, 0, 0.05}, cup_size)};
+  auto model_on = [](std::vector<std::pair<double, int>> centres_and_counts) {
+    MappedObject object;
+    object.class_id = CocoClassId("cup");
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e9), hi = -lo, sum = Eigen::Vector3d::Zero();
+    for (const auto& [x, count] : centres_and_counts) {
+      for (int i = 0; i < count; ++i) {
+        const Eigen::Vector3d p(x + 0.03 * std::sin(i), 0.03 * std::cos(i), 0.01 + 0.0008 * i);
+        object.model_W.push_back(p.cast<float>());
+        lo = lo.cwiseMin(p), hi = hi.cwiseMax(p), sum += p;
+      }
+    }
+    object.min_W = lo, object.max_W = hi;
+    object.centroid_W = sum / static_cast<double>(object.model_W.size());
+    return object;
+  };
+  MappedObject both = model_on({{0.0, 100}, {0.1, 100}});
+  both.id = 1;
+  EXPECT_EQ(Counts(EvaluateObjects(real, {both}, EvaluationConfig{}), "cup").merges, 1);
+  MappedObject one_with_rim = model_on({{0.0, 90}, {0.1, 10}});
+  one_with_rim.id = 2;
+  ASSERT_GT(one_with_rim.max_W.x() - one_with_rim.min_W.x(), 0.15) << "its box spans both mugs";
+  const ObjectEvaluation evaluation = EvaluateObjects(real, {one_with_rim}, EvaluationConfig{});
+  EXPECT_EQ(Counts(evaluation, "cup").merges, 0);
+  EXPECT_EQ(Counts(evaluation, "cup").true_positives, 1);
 }
 
 TEST(EvaluateObjects, APartlySeenObjectStillMatchesAndARotatedBoxIsHonoured) {

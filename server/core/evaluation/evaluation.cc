@@ -40,6 +40,31 @@ bool CanStandFor(const MappedObject& mapped, const GroundTruthObject& real,
   return Iou({mapped.min_W, mapped.max_W}, WorldBox(real)) >= config.min_box_iou;
 }
 
+// Share of `points` inside the real object's oriented box grown by `margin_m`.
+double ShareInside(const std::vector<Eigen::Vector3f>& points, const GroundTruthObject& real,
+                   double margin_m) {
+  if (points.empty()) return 0.0;
+  const Eigen::Isometry3d T_B_W = real.T_W_B.inverse();
+  const Eigen::Vector3d half = 0.5 * real.size_m + Eigen::Vector3d::Constant(margin_m);
+  std::size_t inside = 0;
+  for (const Eigen::Vector3f& p : points) {
+    const Eigen::Vector3d p_B = T_B_W * p.cast<double>();
+    if ((p_B.cwiseAbs().array() <= half.array()).all()) ++inside;
+  }
+  return static_cast<double>(inside) / static_cast<double>(points.size());
+}
+
+// True when the mapped object lies substantially on this real object (see merge_point_share).
+bool Covers(const MappedObject& mapped, const GroundTruthObject& real,
+            const EvaluationConfig& config) {
+  if (!mapped.model_W.empty()) {
+    return ShareInside(mapped.model_W, real, config.merge_box_margin_m) >= config.merge_point_share;
+  }
+  const Box real_box = WorldBox(real);
+  return real_box.Volume() > 0.0 && IntersectionVolume({mapped.min_W, mapped.max_W}, real_box) >=
+                                        config.merge_box_share * real_box.Volume();
+}
+
 // Nearest-neighbour distances through a hash grid of cell `cell_m` over `targets`.
 class PointGrid {
  public:
@@ -91,9 +116,12 @@ double MeanDistance(const std::vector<Eigen::Vector3f>& from,
 
 bool EvaluationConfig::IsValid(std::string* why) const {
   if (!(centroid_margin_m >= 0.0) || !(min_box_iou > 0.0 && min_box_iou <= 1.0) ||
-      !(merge_box_share > 0.0 && merge_box_share <= 1.0) || !(max_model_distance_m > 0.0)) {
+      !(merge_box_share > 0.0 && merge_box_share <= 1.0) ||
+      !(merge_point_share > 0.0 && merge_point_share <= 1.0) || !(merge_box_margin_m >= 0.0) ||
+      !(max_model_distance_m > 0.0)) {
     *why =
-        "EvaluationConfig: centroid_margin_m >= 0, min_box_iou and merge_box_share in (0, 1], "
+        "EvaluationConfig: centroid_margin_m >= 0, min_box_iou, merge_box_share and "
+        "merge_point_share in (0, 1], merge_box_margin_m >= 0, "
         "max_model_distance_m > 0 are required";
     return false;
   }
@@ -134,14 +162,9 @@ ObjectEvaluation EvaluateObjects(const std::vector<GroundTruthObject>& real,
     double best_distance = std::numeric_limits<double>::infinity();
     bool on_other_class = false;
     int covered = 0;
-    const Box mapped_box{mapped[m].min_W, mapped[m].max_W};
     for (std::size_t r = 0; r < real.size(); ++r) {
       const bool same_class = real[r].class_id == mapped[m].class_id;
-      const Box real_box = WorldBox(real[r]);
-      if (same_class && real_box.Volume() > 0.0 &&
-          IntersectionVolume(mapped_box, real_box) >= config.merge_box_share * real_box.Volume()) {
-        ++covered;
-      }
+      if (same_class && Covers(mapped[m], real[r], config)) ++covered;
       if (!CanStandFor(mapped[m], real[r], config)) continue;
       if (!same_class) {
         on_other_class = true;

@@ -41,8 +41,13 @@ struct EvaluationConfig {
   /// centroids), or when their axis-aligned boxes overlap by at least min_box_iou.
   double centroid_margin_m = 0.05;
   double min_box_iou = 0.25;
-  /// A mapped object merges real objects when its axis-aligned box holds at least this share of
-  /// the axis-aligned boxes of two or more real objects of its class.
+  /// A mapped object merges real objects when at least merge_point_share of its model points lie
+  /// in each of two or more real objects of its class (their boxes grown by merge_box_margin_m):
+  /// two monitors mapped as one put half their points on each, while a mug whose model took in a
+  /// rim of its neighbour does not. Without a model: when its axis-aligned box holds at least
+  /// merge_box_share of the axis-aligned boxes of two or more of them.
+  double merge_point_share = 0.25;
+  double merge_box_margin_m = 0.01;
   double merge_box_share = 0.5;
   /// Model distances are capped here (a model point farther from every surface sample counts
   /// as this far), so one stray point cannot dominate the mean.
