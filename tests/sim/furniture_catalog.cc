@@ -3,9 +3,11 @@
 #include <unzip.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
@@ -76,8 +78,26 @@ std::map<std::string, std::string> ParseProperties(const std::string& text) {
 
 struct Material {
   Eigen::Vector3f diffuse = Eigen::Vector3f::Constant(0.8f);
-  cv::Mat texture;  // BGR
+  std::shared_ptr<const Texture> texture;  // null: the diffuse colour
 };
+
+std::shared_ptr<const Texture> DecodeTexture(const std::string& bytes) {
+  const cv::Mat bgr = cv::imdecode(
+      cv::Mat(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data())),
+      cv::IMREAD_COLOR);
+  if (bgr.empty()) return nullptr;
+  auto texture = std::make_shared<Texture>();
+  texture->width = bgr.cols;
+  texture->height = bgr.rows;
+  texture->texels.reserve(static_cast<std::size_t>(bgr.cols) * bgr.rows);
+  for (int y = 0; y < bgr.rows; ++y) {
+    for (int x = 0; x < bgr.cols; ++x) {
+      const cv::Vec3b& c = bgr.at<cv::Vec3b>(y, x);
+      texture->texels.push_back({c[2], c[1], c[0]});
+    }
+  }
+  return texture;
+}
 
 std::map<std::string, Material> ParseMaterials(const std::string& text, const std::string& folder,
                                                ZipArchive* zip) {
@@ -100,27 +120,15 @@ std::map<std::string, Material> ParseMaterials(const std::string& text, const st
       std::getline(words, file);
       file = Trim(file);
       std::string bytes;
-      if (zip->Read(folder + file, &bytes)) {
-        current->texture = cv::imdecode(
-            cv::Mat(1, static_cast<int>(bytes.size()), CV_8UC1, bytes.data()), cv::IMREAD_COLOR);
-      }
+      if (zip->Read(folder + file, &bytes)) current->texture = DecodeTexture(bytes);
     }
   }
   return materials;
 }
 
 Rgb ColorOf(const Material& material, const Eigen::Vector2f& uv) {
-  Eigen::Vector3f rgb = material.diffuse;
-  if (!material.texture.empty()) {
-    // Textures repeat; v runs upwards in OBJ.
-    const float u = uv.x() - std::floor(uv.x()), v = uv.y() - std::floor(uv.y());
-    const int x =
-        std::clamp(static_cast<int>(u * material.texture.cols), 0, material.texture.cols - 1);
-    const int y = std::clamp(static_cast<int>((1.f - v) * material.texture.rows), 0,
-                             material.texture.rows - 1);
-    const cv::Vec3b bgr = material.texture.at<cv::Vec3b>(y, x);
-    rgb = Eigen::Vector3f(bgr[2], bgr[1], bgr[0]) / 255.f;
-  }
+  if (material.texture) return material.texture->Sample(uv);
+  const Eigen::Vector3f rgb = material.diffuse;
   Rgb out;
   for (int c = 0; c < 3; ++c)
     out[c] = static_cast<std::uint8_t>(std::clamp(rgb[c] * 255.f, 0.f, 255.f));
@@ -212,6 +220,9 @@ bool FurnitureCatalog::LoadMesh(const FurnitureEntry& entry, TriangleMesh* mesh,
   const Material plain;
   const Material* material = &plain;
   *mesh = TriangleMesh{};
+  std::map<const Texture*, int> texture_index_of;
+  std::vector<int> texture_of;
+  std::vector<std::array<Eigen::Vector2f, 3>> triangle_uvs;
   std::istringstream lines(text);
   std::string line;
   while (std::getline(lines, line)) {
@@ -240,27 +251,49 @@ bool FurnitureCatalog::LoadMesh(const FurnitureEntry& entry, TriangleMesh* mesh,
       material = it == materials.end() ? &plain : &it->second;
     } else if (keyword == "f") {
       std::vector<int> corners;
-      Eigen::Vector2f uv_sum = Eigen::Vector2f::Zero();
-      int uv_count = 0;
+      std::vector<Eigen::Vector2f> corner_uvs;
+      bool all_uvs = true;
       std::string corner;
       while (words >> corner) {
         const std::size_t slash = corner.find('/');
         const int v = Index(corner.substr(0, slash), positions.size());
         if (v < 0) continue;
         corners.push_back(v);
+        int t = -1;
         if (slash != std::string::npos) {
           const std::size_t next = corner.find('/', slash + 1);
-          const int t = Index(corner.substr(slash + 1, next - slash - 1), uvs.size());
-          if (t >= 0) uv_sum += uvs[t], ++uv_count;
+          t = Index(corner.substr(slash + 1, next - slash - 1), uvs.size());
+        }
+        all_uvs = all_uvs && t >= 0;
+        corner_uvs.push_back(t >= 0 ? uvs[t] : Eigen::Vector2f::Zero());
+      }
+      Eigen::Vector2f uv_sum = Eigen::Vector2f::Zero();
+      for (const Eigen::Vector2f& uv : corner_uvs) uv_sum += uv;
+      const Rgb color = ColorOf(
+          *material, corner_uvs.empty() ? uv_sum : Eigen::Vector2f(uv_sum / corner_uvs.size()));
+      // Textured faces are sampled per pixel by the renderer; the rest keep their colour.
+      int texture_index = -1;
+      if (material->texture && all_uvs) {
+        const auto it = texture_index_of.find(material->texture.get());
+        if (it != texture_index_of.end()) {
+          texture_index = it->second;
+        } else {
+          texture_index = static_cast<int>(mesh->textures.size());
+          texture_index_of[material->texture.get()] = texture_index;
+          mesh->textures.push_back(material->texture);
         }
       }
-      const Rgb color = ColorOf(
-          *material, uv_count > 0 ? Eigen::Vector2f(uv_sum / uv_count) : Eigen::Vector2f::Zero());
       for (std::size_t k = 1; k + 1 < corners.size(); ++k) {
         mesh->triangles.emplace_back(corners[0], corners[k], corners[k + 1]);
         mesh->colors.push_back(color);
+        texture_of.push_back(texture_index);
+        triangle_uvs.push_back({corner_uvs[0], corner_uvs[k], corner_uvs[k + 1]});
       }
     }
+  }
+  if (!mesh->textures.empty()) {
+    mesh->texture_of = std::move(texture_of);
+    mesh->corner_uvs = std::move(triangle_uvs);
   }
   if (mesh->triangles.empty()) {
     *why = entry.archive + ": " + model + " has no faces";

@@ -19,22 +19,38 @@ struct Buffers {
   std::vector<Eigen::Vector3f> normal;  // camera frame, unit, towards the camera
 };
 
+// A corner of a triangle in the camera frame with its texture coordinates.
+struct Corner {
+  Eigen::Vector3f p;
+  Eigen::Vector2f uv;
+};
+
 // Keeps the part of a polygon with z >= kNearM (Sutherland-Hodgman against one plane).
-std::vector<Eigen::Vector3f> ClipNear(const std::vector<Eigen::Vector3f>& polygon) {
-  std::vector<Eigen::Vector3f> out;
+std::vector<Corner> ClipNear(const std::vector<Corner>& polygon) {
+  std::vector<Corner> out;
   for (std::size_t i = 0; i < polygon.size(); ++i) {
-    const Eigen::Vector3f& a = polygon[i];
-    const Eigen::Vector3f& b = polygon[(i + 1) % polygon.size()];
-    const bool a_in = a.z() >= kNearM, b_in = b.z() >= kNearM;
+    const Corner& a = polygon[i];
+    const Corner& b = polygon[(i + 1) % polygon.size()];
+    const bool a_in = a.p.z() >= kNearM, b_in = b.p.z() >= kNearM;
     if (a_in) out.push_back(a);
-    if (a_in != b_in) out.push_back(a + (b - a) * ((kNearM - a.z()) / (b.z() - a.z())));
+    if (a_in != b_in) {
+      const float t = (kNearM - a.p.z()) / (b.p.z() - a.p.z());
+      out.push_back({a.p + (b.p - a.p) * t, a.uv + (b.uv - a.uv) * t});
+    }
   }
   return out;
 }
 
-void FillTriangle(const Eigen::Vector3f& p0, const Eigen::Vector3f& p1, const Eigen::Vector3f& p2,
-                  const Eigen::Vector3f& normal, std::uint16_t id, const Rgb& color,
+// What a triangle looks like: its plain colour, or its texture sampled per pixel.
+struct Look {
+  Rgb color;
+  const Texture* texture = nullptr;
+};
+
+void FillTriangle(const Corner& c0, const Corner& c1, const Corner& c2,
+                  const Eigen::Vector3f& normal, std::uint16_t id, const Look& look,
                   const CameraIntrinsics& K, Buffers* b) {
+  const Eigen::Vector3f &p0 = c0.p, &p1 = c1.p, &p2 = c2.p;
   auto project = [&](const Eigen::Vector3f& p) {
     return Eigen::Vector2f(static_cast<float>(K.fx) * p.x() / p.z() + static_cast<float>(K.cx),
                            static_cast<float>(K.fy) * p.y() / p.z() + static_cast<float>(K.cy));
@@ -57,13 +73,16 @@ void FillTriangle(const Eigen::Vector3f& p0, const Eigen::Vector3f& p1, const Ei
       const float w1 = ((s2 - s).x() * (s0 - s).y() - (s2 - s).y() * (s0 - s).x()) / area;
       const float w2 = 1.f - w0 - w1;
       if (w0 < 0.f || w1 < 0.f || w2 < 0.f) continue;
-      // 1/z is linear in screen space.
+      // 1/z is linear in screen space, and so is uv/z (perspective-correct texturing).
       const float z = 1.f / (w0 * inv_z0 + w1 * inv_z1 + w2 * inv_z2);
       const std::size_t i = static_cast<std::size_t>(v) * b->width + u;
       if (z >= b->z[i]) continue;
       b->z[i] = z;
       b->id[i] = id;
-      b->color[i] = color;
+      b->color[i] = look.texture == nullptr
+                        ? look.color
+                        : look.texture->Sample(z * (w0 * inv_z0 * c0.uv + w1 * inv_z1 * c1.uv +
+                                                    w2 * inv_z2 * c2.uv));
       b->normal[i] = normal;
     }
   }
@@ -73,6 +92,7 @@ void DrawMesh(const TriangleMesh& mesh, const Eigen::Isometry3f& T_C_M, std::uin
               const CameraIntrinsics& K, Buffers* b) {
   std::vector<Eigen::Vector3f> camera(mesh.vertices.size());
   for (std::size_t i = 0; i < mesh.vertices.size(); ++i) camera[i] = T_C_M * mesh.vertices[i];
+  const Eigen::Vector2f no_uv = Eigen::Vector2f::Zero();
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     const Eigen::Vector3i& tri = mesh.triangles[t];
     const Eigen::Vector3f &a = camera[tri[0]], &c1 = camera[tri[1]], &c2 = camera[tri[2]];
@@ -82,9 +102,13 @@ void DrawMesh(const TriangleMesh& mesh, const Eigen::Isometry3f& T_C_M, std::uin
     // Both sides are drawn (catalog meshes are not all closed or consistently wound); the
     // normal is turned towards the camera for shading and the incidence test.
     if (normal.dot(a) > 0.f) normal = -normal;
-    const std::vector<Eigen::Vector3f> polygon = ClipNear({a, c1, c2});
+    const Look look{mesh.colors[t], mesh.TextureOf(t)};
+    const bool textured = look.texture != nullptr;
+    const std::vector<Corner> polygon = ClipNear({{a, textured ? mesh.corner_uvs[t][0] : no_uv},
+                                                  {c1, textured ? mesh.corner_uvs[t][1] : no_uv},
+                                                  {c2, textured ? mesh.corner_uvs[t][2] : no_uv}});
     for (std::size_t k = 1; k + 1 < polygon.size(); ++k) {
-      FillTriangle(polygon[0], polygon[k], polygon[k + 1], normal, id, mesh.colors[t], K, b);
+      FillTriangle(polygon[0], polygon[k], polygon[k + 1], normal, id, look, K, b);
     }
   }
 }

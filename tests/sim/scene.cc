@@ -383,6 +383,26 @@ std::vector<Eigen::Isometry3d> Sweep(const Eigen::Vector3d& target, double radiu
 
 }  // namespace
 
+Rgb Texture::Sample(const Eigen::Vector2f& uv) const {
+  if (width <= 0 || height <= 0) return Rgb{0, 0, 0};
+  const float u = uv.x() - std::floor(uv.x()), v = uv.y() - std::floor(uv.y());
+  const int x = std::clamp(static_cast<int>(u * width), 0, width - 1);
+  const int y = std::clamp(static_cast<int>((1.f - v) * height), 0, height - 1);
+  return texels[static_cast<std::size_t>(y) * width + x];
+}
+
+const Texture* TriangleMesh::TextureOf(std::size_t t) const {
+  if (t >= texture_of.size() || texture_of[t] < 0) return nullptr;
+  return textures[static_cast<std::size_t>(texture_of[t])].get();
+}
+
+void TriangleMesh::PadTextures() {
+  if (texture_of.empty()) return;
+  texture_of.resize(triangles.size(), -1);
+  corner_uvs.resize(triangles.size(),
+                    {Eigen::Vector2f::Zero(), Eigen::Vector2f::Zero(), Eigen::Vector2f::Zero()});
+}
+
 void TriangleMesh::AddBox(const Eigen::Vector3f& min, const Eigen::Vector3f& max, const Rgb& color,
                           const Eigen::Isometry3f& T) {
   const int base = static_cast<int>(vertices.size());
@@ -399,6 +419,7 @@ void TriangleMesh::AddBox(const Eigen::Vector3f& min, const Eigen::Vector3f& max
     colors.push_back(color);
     colors.push_back(color);
   }
+  PadTextures();
 }
 
 void TriangleMesh::AddCylinder(const Eigen::Vector3f& base_centre, float radius, float height,
@@ -422,6 +443,7 @@ void TriangleMesh::AddCylinder(const Eigen::Vector3f& base_centre, float radius,
     triangles.emplace_back(top, t0, t1);
     for (int k = 0; k < 4; ++k) colors.push_back(color);
   }
+  PadTextures();
 }
 
 void TriangleMesh::Append(const TriangleMesh& other, const Eigen::Isometry3f& T) {
@@ -431,6 +453,18 @@ void TriangleMesh::Append(const TriangleMesh& other, const Eigen::Isometry3f& T)
     triangles.push_back(t + Eigen::Vector3i::Constant(base));
   }
   colors.insert(colors.end(), other.colors.begin(), other.colors.end());
+  if (other.texture_of.empty()) {
+    PadTextures();
+    return;
+  }
+  // Untextured triangles so far get "no texture", then other's entries with its textures.
+  texture_of.resize(triangles.size() - other.triangles.size(), -1);
+  corner_uvs.resize(texture_of.size(),
+                    {Eigen::Vector2f::Zero(), Eigen::Vector2f::Zero(), Eigen::Vector2f::Zero()});
+  const int offset = static_cast<int>(textures.size());
+  textures.insert(textures.end(), other.textures.begin(), other.textures.end());
+  for (int index : other.texture_of) texture_of.push_back(index < 0 ? -1 : index + offset);
+  corner_uvs.insert(corner_uvs.end(), other.corner_uvs.begin(), other.corner_uvs.end());
 }
 
 std::vector<Eigen::Vector3f> TriangleMesh::SampleSurface(std::size_t count,

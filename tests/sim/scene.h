@@ -6,6 +6,7 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -15,11 +16,28 @@ namespace objmap::sim {
 
 using Rgb = std::array<std::uint8_t, 3>;
 
-/// Triangles with one colour each.
+/// An RGB image repeated over texture coordinates (u, v), one repeat per unit; v runs upwards,
+/// as in OBJ files.
+struct Texture {
+  int width = 0, height = 0;
+  std::vector<Rgb> texels;  ///< row-major, top row first
+
+  /// The texel at (u, v) (nearest), black when the texture is empty.
+  [[nodiscard]] Rgb Sample(const Eigen::Vector2f& uv) const;
+};
+
+/// Triangles with one colour each, some of them textured per pixel.
 struct TriangleMesh {
   std::vector<Eigen::Vector3f> vertices;
   std::vector<Eigen::Vector3i> triangles;
-  std::vector<Rgb> colors;  ///< one per triangle
+  /// One per triangle; a textured triangle's is its texture's colour at its centre.
+  std::vector<Rgb> colors;
+  /// Per-pixel texturing: empty (no triangle textured), or one entry per triangle, an index into
+  /// `textures` (-1: the plain colour), with the texture coordinates of its three corners in
+  /// `corner_uvs`. Textures are shared between copies of a mesh.
+  std::vector<int> texture_of;
+  std::vector<std::array<Eigen::Vector2f, 3>> corner_uvs;
+  std::vector<std::shared_ptr<const Texture>> textures;
 
   /// An axis-aligned box [min, max] (in the mesh frame, then moved by `T`), outward faces.
   void AddBox(const Eigen::Vector3f& min, const Eigen::Vector3f& max, const Rgb& color,
@@ -36,6 +54,13 @@ struct TriangleMesh {
                                                            std::uint64_t seed) const;
   /// Axis-aligned bounds of the vertices.
   void Bounds(Eigen::Vector3f* min, Eigen::Vector3f* max) const;
+
+  /// The texture of triangle `t`, or nullptr when it has the plain colour.
+  [[nodiscard]] const Texture* TextureOf(std::size_t t) const;
+
+ private:
+  // Gives the triangles added since the last call "no texture" entries, once some are textured.
+  void PadTextures();
 };
 
 /// One real object: its mesh in its own frame and where it stands.

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <set>
 #include <tuple>
 
@@ -171,6 +172,51 @@ TEST(SimRenderer, APlaneAtAKnownDistanceReadsWithinTheNoiseModel) {
   EXPECT_GT(sd, 0.8 * expected_sd);
   EXPECT_LT(sd, 1.2 * expected_sd);
   EXPECT_EQ(off_grid, 0);
+}
+
+// A 2 x 2 texel texture (red, green / blue, white) on a 1 m square facing the camera: every
+// pixel takes the texel under it, not one colour for the triangle, also across the diagonal
+// that splits the square into its two triangles.
+TEST(SimRenderer, TexturedTrianglesAreSampledPerPixel) {
+  Scene scene = WallScene(2.0);
+  scene.structure = TriangleMesh{};
+  TriangleMesh& square = scene.structure;
+  square.vertices = {
+      {-0.5f, -0.5f, 2.f}, {0.5f, -0.5f, 2.f}, {0.5f, 0.5f, 2.f}, {-0.5f, 0.5f, 2.f}};
+  square.triangles = {{0, 1, 2}, {0, 2, 3}};
+  square.colors = {{0, 0, 0}, {0, 0, 0}};
+  auto texture = std::make_shared<Texture>();
+  texture->width = texture->height = 2;
+  texture->texels = {{255, 0, 0}, {0, 255, 0}, {0, 0, 255}, {255, 255, 255}};  // top row first
+  square.textures = {texture};
+  square.texture_of = {0, 0};
+  // Image y (and camera y) runs downwards, texture v upwards: camera y = -0.5 is the top.
+  const Eigen::Vector2f uv0(0.f, 1.f), uv1(1.f, 1.f), uv2(1.f, 0.f), uv3(0.f, 0.f);
+  square.corner_uvs = {{uv0, uv1, uv2}, {uv0, uv2, uv3}};
+  DepthNoiseConfig exact;
+  exact.enabled = false;
+  const RenderedFrame frame = Render(scene, scene.trajectory[0], exact, 1, 0);
+  // The square spans about 146 px around the centre (585 * 0.5 / 2).
+  auto color_at = [&](int u, int v) {
+    const std::size_t i = static_cast<std::size_t>(v) * 640 + u;
+    return Rgb{frame.color.rgb[3 * i], frame.color.rgb[3 * i + 1], frame.color.rgb[3 * i + 2]};
+  };
+  auto dominant = [](const Rgb& c) {
+    if (c[0] > 200 && c[1] > 200 && c[2] > 200) return std::string("white");
+    if (c[0] > 200 && c[1] < 50 && c[2] < 50) return std::string("red");
+    if (c[1] > 200 && c[0] < 50 && c[2] < 50) return std::string("green");
+    if (c[2] > 200 && c[0] < 50 && c[1] < 50) return std::string("blue");
+    return std::string("other");
+  };
+  // Quadrants sampled on both sides of the diagonal (u - 320 = v - 240).
+  for (const auto& [du, dv] : {std::pair{-100, -40}, {-40, -100}}) {
+    EXPECT_EQ(dominant(color_at(320 + du, 240 + dv)), "red") << du << "," << dv;
+  }
+  for (const auto& [du, dv] : {std::pair{100, 40}, {40, 100}}) {
+    EXPECT_EQ(dominant(color_at(320 + du, 240 + dv)), "white") << du << "," << dv;
+  }
+  EXPECT_EQ(dominant(color_at(420, 160)), "green");
+  EXPECT_EQ(dominant(color_at(220, 320)), "blue");
 }
 
 TEST(SimRenderer, GrazingSurfacesAndFarPixelsReadNothing) {
