@@ -182,8 +182,10 @@ std::vector<std::pair<ObjectId, ObjectId>> Associator::FindDuplicates(
       const bool object_smaller = object->model_W.size() <= other.model_W.size();
       const MapObject& small = object_smaller ? *object : other;
       const MapObject& large = object_smaller ? other : *object;
-      if (MatchFraction(large, small.model_W.Points().points) < config_.min_match_fraction)
+      if (MatchFraction(large, small.model_W.Points().points, config_.duplicate_distance_m) <
+          config_.min_match_fraction) {
         continue;
+      }
       duplicates.emplace_back(large.id, small.id);
       absorbed.push_back(small.id);
       if (object_smaller) break;
