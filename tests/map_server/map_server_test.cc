@@ -80,6 +80,23 @@ class MapServerScene : public ::testing::Test {
     return cups;
   }
 
+  // Restarts the server on its file: the cups come back with their ids, observations and
+  // centroids.
+  void ExpectTheSameCupsAfterRestart(
+      std::unique_ptr<MapServer>* server,
+      const std::vector<std::shared_ptr<const ObjectView>>& before) const {
+    server->reset();
+    *server = OpenServer();
+    ASSERT_TRUE(*server);
+    const auto restored = Cups(**server);
+    ASSERT_EQ(restored.size(), before.size());
+    for (std::size_t i = 0; i < before.size(); ++i) {
+      EXPECT_EQ(restored[i]->id, before[i]->id);
+      EXPECT_EQ(restored[i]->observations, before[i]->observations);
+      EXPECT_LT((restored[i]->centroid_W - before[i]->centroid_W).norm(), 1e-4);
+    }
+  }
+
   CameraIntrinsics K_;
   std::vector<SceneBox> boxes_;
   std::vector<Eigen::Vector3d> eyes_;
@@ -371,14 +388,7 @@ TEST_F(MapServerScene, PoseUpdateMovesObjectsAndOccupancy) {
   EXPECT_GT(counts.occupied, 0u);
 
   // A restart regenerates with the stored poses.
-  server.reset();
-  server = OpenServer();
-  ASSERT_TRUE(server);
-  const auto restored = Cups(*server);
-  ASSERT_EQ(restored.size(), after.size());
-  for (std::size_t i = 0; i < after.size(); ++i) {
-    EXPECT_LT((restored[i]->centroid_W - after[i]->centroid_W).norm(), 1e-4);
-  }
+  ExpectTheSameCupsAfterRestart(&server, after);
 }
 
 // The third view arrives with a pose drifted 15 cm sideways, so its cups are two more objects; a
@@ -411,17 +421,7 @@ TEST_F(MapServerScene, NonRigidCorrectionReassociatesAndTheStoreKeepsTheNewGroup
     EXPECT_EQ(cup->observations, 3);
     EXPECT_NEAR(std::abs(cup->centroid_W.y()), 0.2, 0.05);
   }
-
-  server.reset();
-  server = OpenServer();
-  ASSERT_TRUE(server);
-  const auto restored = Cups(*server);
-  ASSERT_EQ(restored.size(), after.size());
-  for (std::size_t i = 0; i < after.size(); ++i) {
-    EXPECT_EQ(restored[i]->id, after[i]->id);
-    EXPECT_EQ(restored[i]->observations, 3);
-    EXPECT_LT((restored[i]->centroid_W - after[i]->centroid_W).norm(), 1e-4);
-  }
+  ExpectTheSameCupsAfterRestart(&server, after);
 }
 
 TEST_F(MapServerScene, ChangesAndInventorySinceAVersion) {
