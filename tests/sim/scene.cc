@@ -581,9 +581,25 @@ bool MakeSceneFromFile(const std::string& path, const FurnitureCatalog* catalog,
   const nlohmann::json camera = file.value("camera", nlohmann::json::object());
   const int frames = camera.value("frames", 300);
   const double radius = camera.value("radius", 1.7);
-  if (!Numbers(camera.value("target", nlohmann::json()), 3, &target) || frames < 1 ||
-      !(radius > 0.0)) {
-    *why = path + ": \"camera\" needs \"target\" [x, y, z], \"frames\" >= 1, \"radius\" > 0";
+  const nlohmann::json waypoints = camera.value("waypoints", nlohmann::json::array());
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> eye_target;  // of the waypoints
+  for (std::size_t i = 0; i < waypoints.size(); ++i) {
+    std::vector<float> eye, at;
+    if (!waypoints[i].is_object() ||
+        !Numbers(waypoints[i].value("eye", nlohmann::json()), 3, &eye) ||
+        !Numbers(waypoints[i].value("target", nlohmann::json()), 3, &at)) {
+      *why = path + ": camera.waypoints[" + std::to_string(i) +
+             "] needs \"eye\" and \"target\" [x, y, z]";
+      return false;
+    }
+    eye_target.emplace_back(Eigen::Vector3d(eye[0], eye[1], eye[2]),
+                            Eigen::Vector3d(at[0], at[1], at[2]));
+  }
+  if ((eye_target.empty() && !Numbers(camera.value("target", nlohmann::json()), 3, &target)) ||
+      frames < 1 || !(radius > 0.0)) {
+    *why = path +
+           ": \"camera\" needs \"target\" [x, y, z] (or \"waypoints\"), \"frames\" >= 1, "
+           "\"radius\" > 0";
     return false;
   }
   *scene = Scene{};
@@ -636,8 +652,22 @@ bool MakeSceneFromFile(const std::string& path, const FurnitureCatalog* catalog,
                 Eigen::Vector3f(position[0], position[1], position[2]),
                 entry.value("yaw_deg", 0.f) * kPi / 180.f, mesh_name.empty() ? nullptr : &names);
   }
-  scene->trajectory =
-      Sweep(Eigen::Vector3d(target[0], target[1], target[2]), radius, frames, &random);
+  if (eye_target.empty()) {
+    scene->trajectory =
+        Sweep(Eigen::Vector3d(target[0], target[1], target[2]), radius, frames, &random);
+    return true;
+  }
+  // Frames spread evenly over the waypoints, eye and target moving in straight lines between.
+  for (int f = 0; f < frames; ++f) {
+    const double t =
+        frames == 1 ? 0.0 : static_cast<double>(f) * (eye_target.size() - 1) / (frames - 1);
+    const std::size_t i = std::min(static_cast<std::size_t>(t), eye_target.size() - 1);
+    const std::size_t j = std::min(i + 1, eye_target.size() - 1);
+    const double a = t - static_cast<double>(i);
+    scene->trajectory.push_back(
+        testing::LookAt((1.0 - a) * eye_target[i].first + a * eye_target[j].first,
+                        (1.0 - a) * eye_target[i].second + a * eye_target[j].second));
+  }
   return true;
 }
 

@@ -102,7 +102,10 @@ class FurnitureCatalog;
 ///    "camera": {"target": [2.3, 3.2, 0.8], "radius": 1.7, "frames": 300}}
 /// Positions are the objects' base centres (metres); "mesh" names a catalog model (used when the
 /// catalog has it, scaled to "size"; otherwise a box of "size" stands in); "size" may be left
-/// out when the catalog has the mesh. The camera sweeps an arc in front of the target.
+/// out when the catalog has the mesh. The camera sweeps an arc in front of the target, or, with
+///    "camera": {"waypoints": [{"eye": [x, y, z], "target": [x, y, z]}, ...], "frames": 300},
+/// follows the waypoints: frames spread evenly over them, eye and target moving in straight
+/// lines, the camera upright and looking at the target.
 [[nodiscard]] bool MakeSceneFromFile(const std::string& path, const FurnitureCatalog* catalog,
                                      Scene* scene, std::string* why);
 

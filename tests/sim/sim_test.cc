@@ -135,6 +135,25 @@ TEST(SimScene, AScenesFileGivesItsRoomObjectsAndCamera) {
     "objects": [{"class": "cup", "mesh": "Coffee mug", "position": [1, 1, 0]}]})";
   EXPECT_FALSE(MakeSceneFromFile(path, nullptr, &scene, &why));
   EXPECT_NE(why.find("\"size\" is needed"), std::string::npos) << why;
+
+  // A trajectory through waypoints (read as float32): five frames over three waypoints, the
+  // camera at each one and halfway between, looking at the target of the moment.
+  std::ofstream(path) << R"({"room": [4, 3, 2.5], "camera": {"frames": 5, "waypoints": [
+      {"eye": [1, 1, 1.5], "target": [2, 2, 0.8]}, {"eye": [3, 1, 1.5], "target": [2, 2, 0.8]},
+      {"eye": [3, 2.5, 1.2], "target": [1, 2, 0.8]}]}})";
+  ASSERT_TRUE(MakeSceneFromFile(path, nullptr, &scene, &why)) << why;
+  ASSERT_EQ(scene.trajectory.size(), 5u);
+  EXPECT_TRUE(scene.trajectory[0].translation().isApprox(Eigen::Vector3d(1, 1, 1.5), 1e-9));
+  EXPECT_TRUE(scene.trajectory[1].translation().isApprox(Eigen::Vector3d(2, 1, 1.5), 1e-9));
+  EXPECT_TRUE(scene.trajectory[4].translation().isApprox(Eigen::Vector3d(3, 2.5, 1.2), 1e-6));
+  // Camera z (the optical axis) points at the target: halfway, (1.5, 2, 0.8) from (3, 1.75, 1.35).
+  const Eigen::Vector3d axis = scene.trajectory[3].linear().col(2);
+  const Eigen::Vector3d towards =
+      (Eigen::Vector3d(1.5, 2, 0.8) - Eigen::Vector3d(3, 1.75, 1.35)).normalized();
+  EXPECT_GT(axis.dot(towards), 0.9999);
+  std::ofstream(path) << R"({"room": [4, 3, 2.5], "camera": {"waypoints": [{"eye": [1, 1, 1]}]}})";
+  EXPECT_FALSE(MakeSceneFromFile(path, nullptr, &scene, &why));
+  EXPECT_NE(why.find("camera.waypoints[0] needs \"eye\" and \"target\""), std::string::npos) << why;
   fs::remove_all(dir);
 }
 
