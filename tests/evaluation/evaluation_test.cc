@@ -125,6 +125,17 @@ TEST(EvaluateObjects, AModelOnTwoObjectsIsAMergeAModelWithAStrayRimIsNot) {
   const ObjectEvaluation evaluation = EvaluateObjects(real, {one_with_rim}, EvaluationConfig{});
   EXPECT_EQ(Counts(evaluation, "cup").merges, 0);
   EXPECT_EQ(Counts(evaluation, "cup").true_positives, 1);
+
+  // Mugs whose boxes overlap (handles): a model of one mug lies partly in the other's box too,
+  // but only points in one box alone count, so it is no merge; a model of both still is.
+  const std::vector<GroundTruthObject> overlapping = {Real(1, "cup", {0, 0, 0.05}, cup_size),
+                                                      Real(2, "cup", {0.06, 0, 0.05}, cup_size)};
+  MappedObject one = model_on({{0.0, 100}});
+  one.id = 3;
+  EXPECT_EQ(Counts(EvaluateObjects(overlapping, {one}, EvaluationConfig{}), "cup").merges, 0);
+  MappedObject two = model_on({{-0.01, 100}, {0.07, 100}});
+  two.id = 4;
+  EXPECT_EQ(Counts(EvaluateObjects(overlapping, {two}, EvaluationConfig{}), "cup").merges, 1);
 }
 
 TEST(EvaluateObjects, APartlySeenObjectStillMatchesAndARotatedBoxIsHonoured) {

@@ -40,29 +40,49 @@ bool CanStandFor(const MappedObject& mapped, const GroundTruthObject& real,
   return Iou({mapped.min_W, mapped.max_W}, WorldBox(real)) >= config.min_box_iou;
 }
 
-// Share of `points` inside the real object's oriented box grown by `margin_m`.
-double ShareInside(const std::vector<Eigen::Vector3f>& points, const GroundTruthObject& real,
-                   double margin_m) {
-  if (points.empty()) return 0.0;
-  const Eigen::Isometry3d T_B_W = real.T_W_B.inverse();
+bool InsideGrown(const Eigen::Vector3f& p_W, const GroundTruthObject& real, double margin_m) {
+  const Eigen::Vector3d p_B = real.T_W_B.inverse() * p_W.cast<double>();
   const Eigen::Vector3d half = 0.5 * real.size_m + Eigen::Vector3d::Constant(margin_m);
-  std::size_t inside = 0;
-  for (const Eigen::Vector3f& p : points) {
-    const Eigen::Vector3d p_B = T_B_W * p.cast<double>();
-    if ((p_B.cwiseAbs().array() <= half.array()).all()) ++inside;
-  }
-  return static_cast<double>(inside) / static_cast<double>(points.size());
+  return (p_B.cwiseAbs().array() <= half.array()).all();
 }
 
-// True when the mapped object lies substantially on this real object (see merge_point_share).
-bool Covers(const MappedObject& mapped, const GroundTruthObject& real,
-            const EvaluationConfig& config) {
-  if (!mapped.model_W.empty()) {
-    return ShareInside(mapped.model_W, real, config.merge_box_margin_m) >= config.merge_point_share;
+// How many real objects of the mapped object's class it lies substantially on (see
+// EvaluationConfig::merge_point_share). A model point counts for a real object only when it lies
+// in that object's grown box and in no other's of the class: boxes of mugs side by side overlap,
+// and a model of one mug must not count for its neighbour through the shared part.
+int CoveredObjects(const MappedObject& mapped, const std::vector<GroundTruthObject>& real,
+                   const EvaluationConfig& config) {
+  std::vector<std::size_t> same_class;
+  for (std::size_t r = 0; r < real.size(); ++r) {
+    if (real[r].class_id == mapped.class_id) same_class.push_back(r);
   }
-  const Box real_box = WorldBox(real);
-  return real_box.Volume() > 0.0 && IntersectionVolume({mapped.min_W, mapped.max_W}, real_box) >=
-                                        config.merge_box_share * real_box.Volume();
+  int covered = 0;
+  if (mapped.model_W.empty()) {
+    for (std::size_t r : same_class) {
+      const Box real_box = WorldBox(real[r]);
+      if (real_box.Volume() > 0.0 && IntersectionVolume({mapped.min_W, mapped.max_W}, real_box) >=
+                                         config.merge_box_share * real_box.Volume()) {
+        ++covered;
+      }
+    }
+    return covered;
+  }
+  std::vector<std::size_t> exclusive(same_class.size(), 0);
+  for (const Eigen::Vector3f& p : mapped.model_W) {
+    int inside = 0;
+    std::size_t last = 0;
+    for (std::size_t k = 0; k < same_class.size(); ++k) {
+      if (InsideGrown(p, real[same_class[k]], config.merge_box_margin_m)) ++inside, last = k;
+    }
+    if (inside == 1) ++exclusive[last];
+  }
+  for (std::size_t count : exclusive) {
+    if (static_cast<double>(count) >=
+        config.merge_point_share * static_cast<double>(mapped.model_W.size())) {
+      ++covered;
+    }
+  }
+  return covered;
 }
 
 // Nearest-neighbour distances through a hash grid of cell `cell_m` over `targets`.
@@ -161,10 +181,8 @@ ObjectEvaluation EvaluateObjects(const std::vector<GroundTruthObject>& real,
     std::size_t best = real.size();
     double best_distance = std::numeric_limits<double>::infinity();
     bool on_other_class = false;
-    int covered = 0;
     for (std::size_t r = 0; r < real.size(); ++r) {
       const bool same_class = real[r].class_id == mapped[m].class_id;
-      if (same_class && Covers(mapped[m], real[r], config)) ++covered;
       if (!CanStandFor(mapped[m], real[r], config)) continue;
       if (!same_class) {
         on_other_class = true;
@@ -176,7 +194,7 @@ ObjectEvaluation EvaluateObjects(const std::vector<GroundTruthObject>& real,
         best = r;
       }
     }
-    if (covered >= 2) ++counts.merges;
+    if (CoveredObjects(mapped[m], real, config) >= 2) ++counts.merges;
     if (best < real.size()) {
       standing_for[best].push_back(m);
     } else {

@@ -42,9 +42,10 @@ struct EvaluationConfig {
   double centroid_margin_m = 0.05;
   double min_box_iou = 0.25;
   /// A mapped object merges real objects when at least merge_point_share of its model points lie
-  /// in each of two or more real objects of its class (their boxes grown by merge_box_margin_m):
-  /// two monitors mapped as one put half their points on each, while a mug whose model took in a
-  /// rim of its neighbour does not. Without a model: when its axis-aligned box holds at least
+  /// in each of two or more real objects of its class (in its box grown by merge_box_margin_m and
+  /// in no other's of the class, since boxes of things side by side overlap): two monitors mapped
+  /// as one put half their points on each, while a mug whose model took in a rim of its
+  /// neighbour does not. Without a model: when its axis-aligned box holds at least
   /// merge_box_share of the axis-aligned boxes of two or more of them.
   double merge_point_share = 0.25;
   double merge_box_margin_m = 0.01;
