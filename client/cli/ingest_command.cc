@@ -42,7 +42,7 @@ struct IngestSettings {
 
 IngestSettings SettingsFrom(Arguments& args) {
   IngestSettings settings;
-  settings.keyframes.every_frame = args.Has("--every-frame");
+  settings.keyframes.every_nth_frame = args.Has("--every-frame") ? 1 : 0;
   settings.keyframes.min_translation_m =
       args.GetNumber("--min-translation", settings.keyframes.min_translation_m);
   settings.keyframes.min_rotation_deg =

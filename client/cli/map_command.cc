@@ -34,6 +34,7 @@ constexpr char kMapUsage[] =
     "  --min-translation M       keyframe after this much motion, metres (default 0.10)\n"
     "  --min-rotation DEG        keyframe after this much rotation, degrees (default 10)\n"
     "  --every-frame             every frame is a keyframe\n"
+    "  --every-nth-frame N       frames 0, N, 2N, ... are the keyframes, whatever the motion\n"
     "  --min-observations N      inventory: keyframes an object needs (default 3)\n"
     "  --min-confidence C        inventory: confidence an object needs (default 0.2)\n"
     "  --min-detection-rate R    inventory: share of the keyframes seeing an object that must\n"
@@ -150,7 +151,8 @@ SequenceRunConfig RunConfigFrom(Arguments& args) {
       args.GetNumber("--min-translation", config.keyframes.min_translation_m);
   config.keyframes.min_rotation_deg =
       args.GetNumber("--min-rotation", config.keyframes.min_rotation_deg);
-  config.keyframes.every_frame = args.Has("--every-frame");
+  config.keyframes.every_nth_frame =
+      args.Has("--every-frame") ? 1 : static_cast<int>(args.GetNumber("--every-nth-frame", 0));
   config.stop_on_bad_frame = args.Has("--stop-on-error");
   return config;
 }
@@ -196,12 +198,12 @@ bool ApplyCorrectedPoses(const std::string& path, const SequenceRunReport& repor
 }  // namespace
 
 int RunMapCommand(int argc, char** argv) {
-  Arguments args(argc, argv,
-                 {"--out", "--model", "--detections", "--save-detections", "--score-threshold",
-                  "--first-frame", "--max-frames", "--min-translation", "--min-rotation",
-                  "--min-observations", "--min-confidence", "--min-detection-rate",
-                  "--corrected-poses"},
-                 {"--every-frame", "--stop-on-error", "--help"});
+  Arguments args(
+      argc, argv,
+      {"--out", "--model", "--detections", "--save-detections", "--score-threshold",
+       "--first-frame", "--max-frames", "--min-translation", "--min-rotation", "--every-nth-frame",
+       "--min-observations", "--min-confidence", "--min-detection-rate", "--corrected-poses"},
+      {"--every-frame", "--stop-on-error", "--help"});
   if (args.Has("--help")) {
     std::cout << kMapUsage;
     return 0;

@@ -157,5 +157,22 @@ TEST(KeyframeSelector, NeedsMotion) {
   EXPECT_TRUE(selector.IsKeyframe(T));
 }
 
+TEST(KeyframeSelector, EveryNthFrameIgnoresMotion) {
+  KeyframeSelectorConfig config;
+  config.every_nth_frame = 3;
+  KeyframeSelector selector(config);
+  std::vector<int> keyframes;
+  for (int frame = 0; frame < 10; ++frame) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation().x() = frame % 2 == 0 ? 0.0 : 5.0;  // large motion on every other frame
+    if (selector.IsKeyframe(T)) keyframes.push_back(frame);
+  }
+  EXPECT_EQ(keyframes, (std::vector<int>{0, 3, 6, 9}));
+  config.every_nth_frame = -1;
+  std::string why;
+  EXPECT_FALSE(config.IsValid(&why));
+  EXPECT_NE(why.find("every_nth_frame"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace objmap

@@ -5,15 +5,19 @@
 namespace objmap {
 
 bool KeyframeSelectorConfig::IsValid(std::string* why) const {
-  if (!(min_translation_m >= 0.0) || !(min_rotation_deg >= 0.0)) {
-    *why = "KeyframeSelectorConfig: min_translation_m and min_rotation_deg must be >= 0";
+  if (!(min_translation_m >= 0.0) || !(min_rotation_deg >= 0.0) || every_nth_frame < 0) {
+    *why =
+        "KeyframeSelectorConfig: min_translation_m, min_rotation_deg and every_nth_frame must be "
+        ">= 0";
     return false;
   }
   return true;
 }
 
 bool KeyframeSelector::IsKeyframe(const Eigen::Isometry3d& T_W_C) {
-  if (!last_keyframe_T_W_C_ || config_.every_frame) {
+  const long long index = frames_offered_++;
+  if (config_.every_nth_frame > 0) return index % config_.every_nth_frame == 0;
+  if (!last_keyframe_T_W_C_) {
     last_keyframe_T_W_C_ = T_W_C;
     return true;
   }
