@@ -10,6 +10,7 @@
 #include <limits>
 #include <thread>
 
+#include "store/keyframe_store.h"
 #include "test_scenes.h"
 #include "types/coco_classes.h"
 
@@ -420,6 +421,56 @@ TEST_F(MapServerScene, NonRigidCorrectionReassociatesAndTheStoreKeepsTheNewGroup
   for (const auto& cup : after) {
     EXPECT_EQ(cup->observations, 3);
     EXPECT_NEAR(std::abs(cup->centroid_W.y()), 0.2, 0.05);
+  }
+  {
+    std::string why;
+    auto store = KeyframeStore::Open(db_path_, KeyframeStoreConfig{}, &why);
+    ASSERT_TRUE(store) << why;
+    StoredMap stored;
+    ASSERT_TRUE(store->LoadAll(&stored, &why)) << why;
+    EXPECT_FALSE(stored.pose_update_pending) << "the regeneration's commit clears the flag";
+  }
+  ExpectTheSameCupsAfterRestart(&server, after);
+}
+
+// The process dies after UpdatePoses stored the corrected poses and before the regeneration
+// committed (simulated: the store gets exactly what UpdatePoses commits, and no server runs).
+// The restart finds the pose update pending and re-associates with the stored poses.
+TEST_F(MapServerScene, ARestartFinishesAnInterruptedPoseUpdate) {
+  auto server = OpenServer();
+  ASSERT_TRUE(server);
+  Eigen::Isometry3d drifted = Pose(2);
+  drifted.pretranslate(Eigen::Vector3d(0.0, 0.15, 0.0));
+  for (int view = 0; view < 3; ++view) {
+    RgbdFrame frame = testing::RenderFrame(boxes_, K_, Pose(view), "view-" + std::to_string(view));
+    if (view == 2) frame.T_W_C = drifted;
+    AddKeyframeOutcome outcome;
+    ASSERT_TRUE(server->AddKeyframe(frame, CupDetections(view), &outcome).ok());
+  }
+  ASSERT_EQ(Cups(*server, true).size(), 4u);
+  server.reset();
+  {
+    std::string why;
+    auto store = KeyframeStore::Open(db_path_, KeyframeStoreConfig{}, &why);
+    ASSERT_TRUE(store) << why;
+    StoreChange change;
+    change.poses = {{3, Pose(2)}};
+    change.pose_update_pending = true;
+    ASSERT_TRUE(store->Commit(change, &why)) << why;
+  }
+  server = OpenServer();
+  ASSERT_TRUE(server);
+  EXPECT_EQ(Cups(*server, true).size(), 2u) << "the drifted view's cups joined the others";
+  const auto after = Cups(*server);
+  ASSERT_EQ(after.size(), 2u);
+  for (const auto& cup : after) EXPECT_EQ(cup->observations, 3);
+  {
+    std::string why;
+    auto store = KeyframeStore::Open(db_path_, KeyframeStoreConfig{}, &why);
+    ASSERT_TRUE(store) << why;
+    StoredMap stored;
+    ASSERT_TRUE(store->LoadAll(&stored, &why)) << why;
+    EXPECT_FALSE(stored.pose_update_pending) << "the new grouping is stored and the flag cleared";
   }
   ExpectTheSameCupsAfterRestart(&server, after);
 }

@@ -40,6 +40,20 @@ StoredObjectSummary Summarize(const MapObject& object) {
   return summary;
 }
 
+// Every object with all its observations, replacing what the store holds (a re-association).
+StoreChange AllObjectsChange(const Mapper& mapper) {
+  StoreChange change;
+  change.replace_all_objects = true;
+  for (const auto& [id, object] : mapper.objects().objects()) {
+    for (const ObjectObservation& observation : object.observations) {
+      change.observations.push_back({id, observation});
+    }
+    change.object_summaries.push_back(Summarize(object));
+  }
+  change.next_object_id = mapper.objects().next_id();
+  return change;
+}
+
 }  // namespace
 
 bool MapServerConfig::IsValid(std::string* why) const {
@@ -107,10 +121,23 @@ bool MapServer::Impl::RestoreFromStore(std::uint64_t* version, std::string* why)
   if (!store->LoadCheckpoint(&checkpoint, &checkpoint_error)) checkpoint.reset();
   if (checkpoint) checkpoint_version = checkpoint->map_version;
   *version = stored.map_version;
+  const bool pose_update_pending = stored.pose_update_pending;
   std::set<KeyframeId> keyframe_ids;
   const RestoreOutcome restored =
       RestoreMapper(std::move(stored), std::move(checkpoint), mapper.get(), &keyframe_ids);
   keyframes_since_checkpoint = restored.keyframes_integrated;
+  // Poses were stored but their regeneration never committed (the process died in between):
+  // the objects still have the grouping made with the old poses. Re-associate them with the
+  // stored poses, as the regeneration would have (a rigid update regroups nothing).
+  if (pose_update_pending) {
+    mapper->ReassociateObjects();
+    StoreChange change = AllObjectsChange(*mapper);
+    change.pose_update_pending = false;
+    if (!store->Commit(change, why)) {
+      *why = "re-associating after an interrupted pose update: " + *why;
+      return false;
+    }
+  }
   std::lock_guard<std::mutex> lock(known_mutex);
   known_keyframes.swap(keyframe_ids);
   return true;
@@ -275,18 +302,10 @@ MapJob::Result MapServer::Impl::ApplyPoses(MapJob* job) {
   const double elapsed_ms = MillisecondsSince(start);
   SnapshotBuilder::Diff diff;
   auto next = snapshot_builder.Build(*mapper, job->version, &diff);
-  StoreChange change;
-  if (report.reassociated) {
-    // Objects were regrouped: the store's observations are replaced by the new grouping.
-    change.replace_all_objects = true;
-    for (const auto& [id, object] : mapper->objects().objects()) {
-      for (const ObjectObservation& observation : object.observations) {
-        change.observations.push_back({id, observation});
-      }
-      change.object_summaries.push_back(Summarize(object));
-    }
-    change.next_object_id = mapper->objects().next_id();
-  } else {  // object summaries follow the moved models
+  // Objects regrouped: the store's observations are replaced by the new grouping; otherwise the
+  // object summaries follow the moved models.
+  StoreChange change = report.reassociated ? AllObjectsChange(*mapper) : StoreChange{};
+  if (!report.reassociated) {
     for (ObjectId id : diff.updated) {
       if (const MapObject* object = mapper->objects().Find(id)) {
         change.object_summaries.push_back(Summarize(*object));
@@ -294,6 +313,16 @@ MapJob::Result MapServer::Impl::ApplyPoses(MapJob* job) {
     }
   }
   change.map_version = job->version;
+  {
+    // Another queued pose update keeps the flag set: its poses are stored, not yet regenerated.
+    // (This job is still at the front of the queue: Run() pops it after applying it.)
+    std::lock_guard<std::mutex> lock(queue_mutex);
+    const bool more_poses =
+        std::any_of(queue.begin(), queue.end(), [job](const std::shared_ptr<MapJob>& queued) {
+          return queued.get() != job && queued->kind == MapJob::Kind::kPoses;
+        });
+    if (!more_poses) change.pose_update_pending = false;
+  }
   if (!store->Commit(change, &why)) {
     out.status = {StatusCode::kInternal, "regenerated map not recorded: " + why};
   }
@@ -365,6 +394,7 @@ ServiceStatus MapServer::UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3
     if (impl_->stopping) return {StatusCode::kUnavailable, "the server is shutting down"};
     StoreChange change;
     change.poses = poses;
+    change.pose_update_pending = true;  // until the regeneration's commit clears it
     std::string why;
     if (!impl_->store->Commit(change, &why)) {
       return {StatusCode::kInternal, "poses not stored: " + why};

@@ -416,6 +416,11 @@ bool Mapper::UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses, s
   return true;
 }
 
+int Mapper::ReassociateObjects() {
+  impl_->Reassociate();
+  return static_cast<int>(impl_->objects.size());
+}
+
 RestoreOutcome Mapper::Restore(std::map<KeyframeId, KeyframeRecord> keyframes,
                                std::map<ObjectId, std::vector<ObjectObservation>> observations,
                                ObjectId next_object_id, const OccupancyCheckpoint* checkpoint) {

@@ -174,6 +174,11 @@ class Mapper {
   [[nodiscard]] bool UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses,
                                  std::string* why, PoseUpdateReport* report = nullptr);
 
+  /// Replays the association of every observation, keyframe by keyframe, with the current poses
+  /// (what a non-rigid UpdatePoses does); ids follow the observations as there. For a restart
+  /// that finds a pose update whose regeneration was cut off. Returns the object count after.
+  int ReassociateObjects();
+
   /// Replaces the whole state by stored keyframes and object observations (a restart): object
   /// models are rebuilt from them; keyframe ids continue after the largest one. The OctoMap is
   /// loaded from `checkpoint` (may be null) when it is usable: OccupancyMap state at this

@@ -74,6 +74,9 @@ struct StoreChange {
   /// Map metadata written with the change (absent: unchanged).
   std::optional<std::uint64_t> map_version;
   std::optional<ObjectId> next_object_id;
+  /// Set with stored poses that are not yet regenerated, cleared with the regeneration: a
+  /// restart that finds it set re-associates the objects with the stored poses.
+  std::optional<bool> pose_update_pending;
 };
 
 /// The OctoMap as of a map version, with the poses its keyframes were integrated with, so that a
@@ -91,6 +94,7 @@ struct StoredMap {
   std::vector<StoredObjectSummary> objects;   ///< ascending id
   std::uint64_t map_version = 0;
   ObjectId next_object_id = 1;
+  bool pose_update_pending = false;  ///< see StoreChange::pose_update_pending
 };
 
 struct KeyframeStoreConfig {

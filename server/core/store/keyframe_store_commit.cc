@@ -213,7 +213,9 @@ bool ApplyPosesAndMeta(Connection* db, const StoreChange& change, std::string* w
   }
   return (!change.map_version ||
           SetMeta(db, "map_version", static_cast<std::int64_t>(*change.map_version), why)) &&
-         (!change.next_object_id || SetMeta(db, "next_object_id", *change.next_object_id, why));
+         (!change.next_object_id || SetMeta(db, "next_object_id", *change.next_object_id, why)) &&
+         (!change.pose_update_pending ||
+          SetMeta(db, "pose_update_pending", *change.pose_update_pending ? 1 : 0, why));
 }
 
 }  // namespace

@@ -163,13 +163,16 @@ bool ReadObjects(Connection* db, std::vector<StoredObjectSummary>* objects, std:
 }
 
 bool ReadMeta(Connection* db, StoredMap* map, std::string* why) {
-  std::int64_t version = 0, next_id = 1;
+  std::int64_t version = 0, next_id = 1, pending = 0;
+  // A missing row reads 0 (files written before a key existed).
   if (!db->QueryInt("SELECT value FROM meta WHERE key = 'map_version'", &version, why) ||
-      !db->QueryInt("SELECT value FROM meta WHERE key = 'next_object_id'", &next_id, why)) {
+      !db->QueryInt("SELECT value FROM meta WHERE key = 'next_object_id'", &next_id, why) ||
+      !db->QueryInt("SELECT value FROM meta WHERE key = 'pose_update_pending'", &pending, why)) {
     return false;
   }
   map->map_version = static_cast<std::uint64_t>(version);
   map->next_object_id = next_id;
+  map->pose_update_pending = pending != 0;
   return true;
 }
 
