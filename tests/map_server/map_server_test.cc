@@ -81,6 +81,30 @@ class MapServerScene : public ::testing::Test {
     return cups;
   }
 
+  // The third view arrives with a pose drifted 15 cm sideways, so its two cups land where no cup
+  // is and become two more objects.
+  void IngestWithTheThirdViewDrifted(MapServer* server) const {
+    Eigen::Isometry3d drifted = Pose(2);
+    drifted.pretranslate(Eigen::Vector3d(0.0, 0.15, 0.0));
+    for (int view = 0; view < 3; ++view) {
+      RgbdFrame frame =
+          testing::RenderFrame(boxes_, K_, Pose(view), "view-" + std::to_string(view));
+      if (view == 2) frame.T_W_C = drifted;
+      AddKeyframeOutcome outcome;
+      ASSERT_TRUE(server->AddKeyframe(frame, CupDetections(view), &outcome).ok());
+    }
+  }
+
+  // The store's "pose update pending" mark, read on a connection of its own.
+  bool StoredPoseUpdatePending() const {
+    std::string why;
+    auto store = KeyframeStore::Open(db_path_, KeyframeStoreConfig{}, &why);
+    EXPECT_TRUE(store) << why;
+    StoredMap stored;
+    EXPECT_TRUE(store && store->LoadAll(&stored, &why)) << why;
+    return stored.pose_update_pending;
+  }
+
   // Restarts the server on its file: the cups come back with their ids, observations and
   // centroids.
   void ExpectTheSameCupsAfterRestart(
@@ -398,14 +422,7 @@ TEST_F(MapServerScene, PoseUpdateMovesObjectsAndOccupancy) {
 TEST_F(MapServerScene, NonRigidCorrectionReassociatesAndTheStoreKeepsTheNewGrouping) {
   auto server = OpenServer();
   ASSERT_TRUE(server);
-  Eigen::Isometry3d drifted = Pose(2);
-  drifted.pretranslate(Eigen::Vector3d(0.0, 0.15, 0.0));
-  for (int view = 0; view < 3; ++view) {
-    RgbdFrame frame = testing::RenderFrame(boxes_, K_, Pose(view), "view-" + std::to_string(view));
-    if (view == 2) frame.T_W_C = drifted;
-    AddKeyframeOutcome outcome;
-    ASSERT_TRUE(server->AddKeyframe(frame, CupDetections(view), &outcome).ok());
-  }
+  IngestWithTheThirdViewDrifted(server.get());
   ASSERT_EQ(Cups(*server, true).size(), 4u);
   EXPECT_EQ(Cups(*server).size(), 0u) << "two views each are too few for the inventory";
 
@@ -422,14 +439,7 @@ TEST_F(MapServerScene, NonRigidCorrectionReassociatesAndTheStoreKeepsTheNewGroup
     EXPECT_EQ(cup->observations, 3);
     EXPECT_NEAR(std::abs(cup->centroid_W.y()), 0.2, 0.05);
   }
-  {
-    std::string why;
-    auto store = KeyframeStore::Open(db_path_, KeyframeStoreConfig{}, &why);
-    ASSERT_TRUE(store) << why;
-    StoredMap stored;
-    ASSERT_TRUE(store->LoadAll(&stored, &why)) << why;
-    EXPECT_FALSE(stored.pose_update_pending) << "the regeneration's commit clears the flag";
-  }
+  EXPECT_FALSE(StoredPoseUpdatePending()) << "the regeneration's commit clears the flag";
   ExpectTheSameCupsAfterRestart(&server, after);
 }
 
@@ -439,14 +449,7 @@ TEST_F(MapServerScene, NonRigidCorrectionReassociatesAndTheStoreKeepsTheNewGroup
 TEST_F(MapServerScene, ARestartFinishesAnInterruptedPoseUpdate) {
   auto server = OpenServer();
   ASSERT_TRUE(server);
-  Eigen::Isometry3d drifted = Pose(2);
-  drifted.pretranslate(Eigen::Vector3d(0.0, 0.15, 0.0));
-  for (int view = 0; view < 3; ++view) {
-    RgbdFrame frame = testing::RenderFrame(boxes_, K_, Pose(view), "view-" + std::to_string(view));
-    if (view == 2) frame.T_W_C = drifted;
-    AddKeyframeOutcome outcome;
-    ASSERT_TRUE(server->AddKeyframe(frame, CupDetections(view), &outcome).ok());
-  }
+  IngestWithTheThirdViewDrifted(server.get());
   ASSERT_EQ(Cups(*server, true).size(), 4u);
   server.reset();
   {
@@ -464,14 +467,7 @@ TEST_F(MapServerScene, ARestartFinishesAnInterruptedPoseUpdate) {
   const auto after = Cups(*server);
   ASSERT_EQ(after.size(), 2u);
   for (const auto& cup : after) EXPECT_EQ(cup->observations, 3);
-  {
-    std::string why;
-    auto store = KeyframeStore::Open(db_path_, KeyframeStoreConfig{}, &why);
-    ASSERT_TRUE(store) << why;
-    StoredMap stored;
-    ASSERT_TRUE(store->LoadAll(&stored, &why)) << why;
-    EXPECT_FALSE(stored.pose_update_pending) << "the new grouping is stored and the flag cleared";
-  }
+  EXPECT_FALSE(StoredPoseUpdatePending()) << "the new grouping is stored and the flag cleared";
   ExpectTheSameCupsAfterRestart(&server, after);
 }
 
