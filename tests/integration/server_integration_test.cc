@@ -18,11 +18,11 @@
 #include <set>
 #include <sstream>
 #include <thread>
-#include <unordered_set>
 
 #include "cli/run_objmap.h"
 #include "dataset/keyframe_selector.h"
 #include "dataset/sequence_reader.h"
+#include "evaluation/voxel_set.h"
 #include "integration/server_process.h"
 #include "objmap/client.h"
 #include "objmap/conversions.h"
@@ -101,43 +101,6 @@ std::vector<Eigen::Vector3d> OccupiedVoxels(const std::string& bt, double* resol
   }
   return centres;
 }
-
-// Voxel centres on a grid of `resolution`, looked up by their integer cell.
-class VoxelSet {
- public:
-  VoxelSet(const std::vector<Eigen::Vector3d>& centres, double resolution)
-      : resolution_(resolution) {
-    for (const Eigen::Vector3d& c : centres) cells_.insert(Key(Cell(c)));
-  }
-  // Distance from p to the nearest voxel centre within one cell of p's cell (+inf if none).
-  [[nodiscard]] double NearestDistance(const Eigen::Vector3d& p) const {
-    const Eigen::Vector3i cell = Cell(p);
-    double best = std::numeric_limits<double>::infinity();
-    for (int dx = -1; dx <= 1; ++dx) {
-      for (int dy = -1; dy <= 1; ++dy) {
-        for (int dz = -1; dz <= 1; ++dz) {
-          const Eigen::Vector3i n = cell + Eigen::Vector3i(dx, dy, dz);
-          if (cells_.count(Key(n)) == 0) continue;
-          best = std::min(
-              best, (p - (n.cast<double>() + Eigen::Vector3d::Constant(0.5)) * resolution_).norm());
-        }
-      }
-    }
-    return best;
-  }
-
- private:
-  [[nodiscard]] Eigen::Vector3i Cell(const Eigen::Vector3d& p) const {
-    return (p / resolution_).array().floor().cast<int>();
-  }
-  static std::int64_t Key(const Eigen::Vector3i& c) {
-    return (static_cast<std::int64_t>(c.x() + (1 << 20)) << 42) |
-           (static_cast<std::int64_t>(c.y() + (1 << 20)) << 21) |
-           static_cast<std::int64_t>(c.z() + (1 << 20));
-  }
-  double resolution_;
-  std::unordered_set<std::int64_t> cells_;
-};
 
 class ServerIntegration : public ::testing::Test {
  protected:
@@ -774,10 +737,11 @@ TEST_F(ServerIntegration, RigidPoseUpdateMovesObjectsAndOccupancyWhileQueriesAns
   ASSERT_TRUE(client().GetOctomap(v1::GetOctomapRequest(), &octomap_after).ok());
   const std::vector<Eigen::Vector3d> occupied_after =
       OccupiedVoxels(octomap_after.bt(), &resolution);
-  const VoxelSet after_set(occupied_after, resolution);
+  VoxelSet after_set(resolution);
+  for (const Eigen::Vector3d& c : occupied_after) after_set.Insert(c);
   std::size_t within_1cm = 0, within_2cm = 0;
   for (const Eigen::Vector3d& c : occupied_before) {
-    const double d = after_set.NearestDistance(G * c);
+    const double d = after_set.NearestCenterDistance(G * c);
     within_1cm += d <= 0.01;
     within_2cm += d <= 0.02;
   }

@@ -10,9 +10,9 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
-#include <unordered_map>
 
 #include "detection/detections_file.h"
+#include "evaluation/voxel_set.h"
 #include "pointcloud_io/pointcloud_io.h"
 #include "sim/sim_random.h"
 #include "types/coco_classes.h"
@@ -194,7 +194,7 @@ std::vector<Detection> DetectFromInstances(const Scene& scene, const RenderedFra
 // rendered colour, apart for the structure and the objects.
 class SeenSurface {
  public:
-  explicit SeenSurface(double voxel_m) : voxel_m_(voxel_m) {}
+  explicit SeenSurface(double voxel_m) : structure_(voxel_m), objects_(voxel_m) {}
 
   void Add(const RenderedFrame& frame, const Eigen::Isometry3d& T_W_C, const CameraIntrinsics& K,
            double max_range_m) {
@@ -210,11 +210,7 @@ class SeenSurface {
             T * Eigen::Vector3f(static_cast<float>((u - K.cx) / K.fx * z),
                                 static_cast<float>((v - K.cy) / K.fy * z), z);
         Part& part = frame.instance[i] == 0 ? structure_ : objects_;
-        const Eigen::Vector3i cell = (p_W.cast<double>() / voxel_m_).array().floor().cast<int>();
-        const std::int64_t key = (std::int64_t{cell.x() + (1 << 20)} << 42) |
-                                 (std::int64_t{cell.y() + (1 << 20)} << 21) |
-                                 std::int64_t{cell.z() + (1 << 20)};
-        if (!part.index.emplace(key, part.points.size()).second) continue;
+        if (!part.voxels.Insert(p_W.cast<double>())) continue;
         part.points.push_back(p_W);
         part.colors.push_back(
             {frame.color.rgb[3 * i], frame.color.rgb[3 * i + 1], frame.color.rgb[3 * i + 2]});
@@ -230,11 +226,11 @@ class SeenSurface {
 
  private:
   struct Part {
-    std::unordered_map<std::int64_t, std::size_t> index;
+    explicit Part(double voxel_m) : voxels(voxel_m) {}
+    VoxelSet voxels;  // those that have their point
     std::vector<Eigen::Vector3f> points;
     std::vector<std::array<std::uint8_t, 3>> colors;
   };
-  double voxel_m_;
   Part structure_, objects_;
 };
 

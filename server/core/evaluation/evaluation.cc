@@ -6,6 +6,8 @@
 #include <limits>
 #include <unordered_map>
 
+#include "evaluation/voxel_set.h"
+
 namespace objmap {
 namespace {
 
@@ -30,20 +32,19 @@ double Iou(const Box& a, const Box& b) {
   return united > 0.0 ? intersection / united : 0.0;
 }
 
+// True when `p_B` (in the real object's box frame) lies in its box grown by `margin_m`.
+bool InsideGrownBox(const Eigen::Vector3d& p_B, const GroundTruthObject& real, double margin_m) {
+  const Eigen::Vector3d half = 0.5 * real.size_m + Eigen::Vector3d::Constant(margin_m);
+  return (p_B.cwiseAbs().array() <= half.array()).all();
+}
+
 // The mapped object can stand for the real one (classes aside).
 bool CanStandFor(const MappedObject& mapped, const GroundTruthObject& real,
                  const EvaluationConfig& config) {
-  const Eigen::Vector3d c_B = real.T_W_B.inverse() * mapped.centroid_W;
-  const Eigen::Vector3d half =
-      0.5 * real.size_m + Eigen::Vector3d::Constant(config.centroid_margin_m);
-  if ((c_B.cwiseAbs().array() <= half.array()).all()) return true;
+  if (InsideGrownBox(real.T_W_B.inverse() * mapped.centroid_W, real, config.centroid_margin_m)) {
+    return true;
+  }
   return Iou({mapped.min_W, mapped.max_W}, WorldBox(real)) >= config.min_box_iou;
-}
-
-bool InsideGrown(const Eigen::Vector3f& p_W, const GroundTruthObject& real, double margin_m) {
-  const Eigen::Vector3d p_B = real.T_W_B.inverse() * p_W.cast<double>();
-  const Eigen::Vector3d half = 0.5 * real.size_m + Eigen::Vector3d::Constant(margin_m);
-  return (p_B.cwiseAbs().array() <= half.array()).all();
 }
 
 // How many real objects of the mapped object's class it lies substantially on (see
@@ -67,12 +68,17 @@ int CoveredObjects(const MappedObject& mapped, const std::vector<GroundTruthObje
     }
     return covered;
   }
+  std::vector<Eigen::Isometry3d> T_B_W;
+  for (std::size_t r : same_class) T_B_W.push_back(real[r].T_W_B.inverse());
   std::vector<std::size_t> exclusive(same_class.size(), 0);
   for (const Eigen::Vector3f& p : mapped.model_W) {
     int inside = 0;
     std::size_t last = 0;
     for (std::size_t k = 0; k < same_class.size(); ++k) {
-      if (InsideGrown(p, real[same_class[k]], config.merge_box_margin_m)) ++inside, last = k;
+      if (InsideGrownBox(T_B_W[k] * p.cast<double>(), real[same_class[k]],
+                         config.merge_box_margin_m)) {
+        ++inside, last = k;
+      }
     }
     if (inside == 1) ++exclusive[last];
   }
@@ -89,7 +95,7 @@ int CoveredObjects(const MappedObject& mapped, const std::vector<GroundTruthObje
 class PointGrid {
  public:
   PointGrid(const std::vector<Eigen::Vector3f>& targets, double cell_m) : cell_m_(cell_m) {
-    for (const Eigen::Vector3f& p : targets) cells_[Key(Cell(p))].push_back(p);
+    for (const Eigen::Vector3f& p : targets) cells_[PackVoxel(Cell(p))].push_back(p);
   }
   // Distance to the nearest target, capped at `cap_m` (searched within the cells that reach it).
   [[nodiscard]] double Distance(const Eigen::Vector3f& p, double cap_m) const {
@@ -99,7 +105,7 @@ class PointGrid {
     for (int dx = -reach; dx <= reach; ++dx) {
       for (int dy = -reach; dy <= reach; ++dy) {
         for (int dz = -reach; dz <= reach; ++dz) {
-          auto it = cells_.find(Key(centre + Eigen::Vector3i(dx, dy, dz)));
+          auto it = cells_.find(PackVoxel(centre + Eigen::Vector3i(dx, dy, dz)));
           if (it == cells_.end()) continue;
           for (const Eigen::Vector3f& q : it->second) {
             best2 = std::min(best2, static_cast<double>((p - q).squaredNorm()));
@@ -112,11 +118,7 @@ class PointGrid {
 
  private:
   [[nodiscard]] Eigen::Vector3i Cell(const Eigen::Vector3f& p) const {
-    return (p.cast<double>() / cell_m_).array().floor().cast<int>();
-  }
-  static std::int64_t Key(const Eigen::Vector3i& c) {
-    constexpr std::int64_t kOffset = 1 << 20;
-    return ((c.x() + kOffset) << 42) | ((c.y() + kOffset) << 21) | (c.z() + kOffset);
+    return VoxelOf(p.cast<double>(), cell_m_);
   }
   double cell_m_;
   std::unordered_map<std::int64_t, std::vector<Eigen::Vector3f>> cells_;

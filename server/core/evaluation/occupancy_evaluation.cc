@@ -1,49 +1,13 @@
 // The OctoMap scored against the surface the sensor saw: voxel keys in hash sets, neighbourhoods
 // of one or two voxels, and the map's own state at each surface voxel.
-#include <array>
-#include <cmath>
-#include <cstdint>
-#include <unordered_set>
+#include <cstddef>
 
 #include "evaluation/evaluation.h"
+#include "evaluation/voxel_set.h"
 #include "occupancy/occupancy_map.h"
 
 namespace objmap {
 namespace {
-
-using VoxelKey = std::int64_t;
-
-class VoxelSet {
- public:
-  explicit VoxelSet(double voxel_m) : voxel_m_(voxel_m) {}
-
-  void Insert(const Eigen::Vector3d& p) { keys_.insert(Key(Cell(p))); }
-
-  // True when the voxel of `p` or one within `reach` voxels (Chebyshev) is in the set.
-  [[nodiscard]] bool HasWithin(const Eigen::Vector3d& p, int reach) const {
-    const Eigen::Vector3i centre = Cell(p);
-    for (int dx = -reach; dx <= reach; ++dx) {
-      for (int dy = -reach; dy <= reach; ++dy) {
-        for (int dz = -reach; dz <= reach; ++dz) {
-          if (keys_.count(Key(centre + Eigen::Vector3i(dx, dy, dz))) > 0) return true;
-        }
-      }
-    }
-    return false;
-  }
-
- private:
-  [[nodiscard]] Eigen::Vector3i Cell(const Eigen::Vector3d& p) const {
-    return (p / voxel_m_).array().floor().cast<int>();
-  }
-  static VoxelKey Key(const Eigen::Vector3i& c) {
-    constexpr VoxelKey kOffset = 1 << 20;
-    return ((c.x() + kOffset) << 42) | ((c.y() + kOffset) << 21) | (c.z() + kOffset);
-  }
-
-  double voxel_m_;
-  std::unordered_set<VoxelKey> keys_;
-};
 
 double Share(std::size_t part, std::size_t whole) {
   return whole == 0 ? 0.0 : static_cast<double>(part) / static_cast<double>(whole);
