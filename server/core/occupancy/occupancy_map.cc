@@ -47,6 +47,19 @@ RayEnd ClipRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& point, doub
 
 bool AllFinite(const Eigen::Vector3f& p) { return p.allFinite(); }
 
+// The free-space end of a ray to `point` that stops margin_of(range) short of it; false (no
+// ray) when the point is no farther than that from the origin.
+template <typename MarginOf>
+bool StopShort(const Eigen::Vector3f& origin, const Eigen::Vector3f& point, MarginOf margin_of,
+               Eigen::Vector3f* end_W) {
+  const Eigen::Vector3f d = point - origin;
+  const float length = d.norm();
+  const float margin_m = margin_of(length);
+  if (length <= margin_m) return false;
+  *end_W = point - d * (margin_m / length);
+  return true;
+}
+
 }  // namespace
 
 bool OccupancyConfig::IsValid(std::string* why) const {
@@ -85,9 +98,14 @@ void OccupancyMap::Impl::CollectRays(const ScanW& scan) {
   const float margin_m = static_cast<float>(config.object_margin_voxels * config.resolution_m);
   const bool structure_margin =
       config.structure_margin_m > 0.0 || config.structure_margin_per_m2 > 0.0;
-  auto StructureMargin = [this](float range_m) {
+  auto structure_margin_of = [this](float range_m) {
     return static_cast<float>(config.structure_margin_m +
                               config.structure_margin_per_m2 * range_m * range_m);
+  };
+  // Object rays stop short of the object surface so they do not erase the structure it touches,
+  // nor, where depth noise put the point behind it, the object's own surface.
+  auto object_margin_of = [&](float range_m) {
+    return std::max(margin_m, structure_margin_of(range_m));
   };
   for (const Eigen::Vector3f& p : scan.structure_points_W) {
     if (!AllFinite(p)) continue;
@@ -96,27 +114,16 @@ void OccupancyMap::Impl::CollectRays(const ScanW& scan) {
     if (ray.in_range && PointToKey(p, config.resolution_m, &key)) {
       occupied_keys.push_back(PackKey(key));
     }
-    if (ray.in_range && structure_margin) {
-      const Eigen::Vector3f d = p - origin;
-      const float length = d.norm();
-      const float margin = StructureMargin(length);
-      if (length <= margin) continue;
-      ray.end_W = p - d * (margin / length);
+    if (ray.in_range && structure_margin &&
+        !StopShort(origin, p, structure_margin_of, &ray.end_W)) {
+      continue;
     }
     ray_ends_W.push_back(ray.end_W);
   }
   for (const Eigen::Vector3f& p : scan.object_points_W) {
     if (!AllFinite(p)) continue;
     RayEnd ray = ClipRay(origin, p, config.max_range_m);
-    if (ray.in_range) {
-      // Stop short of the object surface so it does not erase the structure it touches, nor,
-      // where depth noise put the point behind it, the object's own surface.
-      const Eigen::Vector3f d = p - origin;
-      const float length = d.norm();
-      const float margin = std::max(margin_m, StructureMargin(length));
-      if (length <= margin) continue;
-      ray.end_W = p - d * (margin / length);
-    }
+    if (ray.in_range && !StopShort(origin, p, object_margin_of, &ray.end_W)) continue;
     ray_ends_W.push_back(ray.end_W);
   }
   if (config.one_ray_per_end_voxel) KeepOneRayPerEndVoxel();
