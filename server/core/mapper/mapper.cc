@@ -43,21 +43,25 @@ std::vector<Eigen::Vector3f> ToWorld(const std::vector<Eigen::Vector3f>& points_
   return points_W;
 }
 
-ScanW ToScan(const KeyframeRecord& record) {
+// The stored depth as the occupancy map's input, with the object mask; the depth image's pixel
+// grid lets the map carve free space block-wise.
+DepthScanW ToScan(const KeyframeRecord& record) {
   DepthImage depth;
   depth.width = record.intrinsics.width;
   depth.height = record.intrinsics.height;
   depth.depth_m.reserve(record.depth_mm.size());
   for (std::uint16_t mm : record.depth_mm) depth.depth_m.push_back(mm * 0.001f);
-  const OrganizedCloud cloud_C = BackProject(depth, ColorImage{}, record.intrinsics);
-  const Eigen::Isometry3f T_W_C = record.T_W_C.cast<float>();
-  ScanW scan;
-  scan.origin_W = T_W_C.translation();
-  for (std::size_t i = 0; i < cloud_C.size(); ++i) {
-    if (!cloud_C.IsValid(static_cast<int>(i))) continue;
-    (record.object_mask[i] ? scan.object_points_W : scan.structure_points_W)
-        .push_back(T_W_C * cloud_C.points_C[i]);
-  }
+  OrganizedCloud cloud_C = BackProject(depth, ColorImage{}, record.intrinsics);
+  DepthScanW scan;
+  scan.T_W_C = record.T_W_C.cast<float>();
+  scan.width = cloud_C.width;
+  scan.height = cloud_C.height;
+  scan.fx = static_cast<float>(record.intrinsics.fx);
+  scan.fy = static_cast<float>(record.intrinsics.fy);
+  scan.cx = static_cast<float>(record.intrinsics.cx);
+  scan.cy = static_cast<float>(record.intrinsics.cy);
+  scan.points_C = std::move(cloud_C.points_C);
+  scan.object_mask = record.object_mask;
   return scan;
 }
 

@@ -2,40 +2,56 @@
 
 namespace objmap::occupancy_internal {
 
-void BatchOcTree::ApplyFreeSpace(const FreeSpaceGrid& free_space) {
+void BatchOcTree::ApplyScan(const FreeSpaceGrid& free_space,
+                            const std::vector<std::uint64_t>& occupied) {
   const VoxelKey root_key = {0, 0, 0};
   const BlockState root_state = free_space.State(0, root_key);
-  if (root_state == BlockState::kEmpty) return;
+  if (root_state == BlockState::kEmpty && occupied.empty()) return;
   const bool fresh = root == nullptr;
   if (fresh) {
     root = new octomap::OcTreeNode();
     ++tree_size;
   }
-  Visit(root, 0, root_key, root_state == BlockState::kFull, fresh, free_space);
+  Visit(root, 0, root_key, root_state == BlockState::kFull, fresh, free_space, occupied.begin(),
+        occupied.end());
   size_changed = true;
 }
 
 // `node` covers the cube of 2^(16 - depth) voxels starting at `base`; the scan saw all of it
-// free (`full`) or part of it. `fresh` nodes were just created for unknown space, so having no
-// children means "unknown below", not "pruned block".
+// free (`full`) or part of it, and [occupied_begin, occupied_end) are the occupied voxels in it.
+// `fresh` nodes were just created for unknown space, so having no children means "unknown
+// below", not "pruned block".
 void BatchOcTree::Visit(octomap::OcTreeNode* node, int depth, const VoxelKey& base, bool full,
-                        bool fresh, const FreeSpaceGrid& free_space) {
+                        bool fresh, const FreeSpaceGrid& free_space, CodeIterator occupied_begin,
+                        CodeIterator occupied_end) {
+  const bool has_occupied = occupied_begin != occupied_end;
+  if (depth == kTreeDepth) {
+    updateNodeLogOdds(node, has_occupied ? prob_hit_log : prob_miss_log);
+    return;
+  }
   const bool leaf = !nodeHasChildren(node);
-  if (leaf && (full || depth == kTreeDepth)) {
+  if (leaf && full && !has_occupied) {
     updateNodeLogOdds(node, prob_miss_log);
     return;
   }
   if (leaf && !fresh) expandNode(node);  // a pruned block partly seen: split it first
   const int half = 1 << (kTreeDepth - 1 - depth);
+  const int child_shift = 3 * (kTreeDepth - 1 - depth);  // the child's bits in a Morton code
+  CodeIterator child_begin = occupied_begin;
   for (unsigned int c = 0; c < 8; ++c) {
+    CodeIterator child_end = child_begin;
+    while (child_end != occupied_end && ((*child_end >> child_shift) & 7u) == c) ++child_end;
     const VoxelKey child_base = {static_cast<std::uint16_t>(base[0] + ((c & 1) ? half : 0)),
                                  static_cast<std::uint16_t>(base[1] + ((c & 2) ? half : 0)),
                                  static_cast<std::uint16_t>(base[2] + ((c & 4) ? half : 0))};
     const BlockState state = full ? BlockState::kFull : free_space.State(depth + 1, child_base);
-    if (state == BlockState::kEmpty) continue;
-    const bool child_fresh = !nodeChildExists(node, c);
-    octomap::OcTreeNode* child = child_fresh ? createNodeChild(node, c) : getNodeChild(node, c);
-    Visit(child, depth + 1, child_base, state == BlockState::kFull, child_fresh, free_space);
+    if (state != BlockState::kEmpty || child_begin != child_end) {
+      const bool child_fresh = !nodeChildExists(node, c);
+      octomap::OcTreeNode* child = child_fresh ? createNodeChild(node, c) : getNodeChild(node, c);
+      Visit(child, depth + 1, child_base, state == BlockState::kFull, child_fresh, free_space,
+            child_begin, child_end);
+    }
+    child_begin = child_end;
   }
   if (!pruneNode(node)) node->updateOccupancyChildren();
 }

@@ -1,10 +1,15 @@
 #pragma once
 // Internal to the occupancy module (includes OctoMap; never include it from a public header).
-// An octomap::OcTree that can apply one scan's free space block-wise: a node whose whole volume
-// the scan saw free gets one log-odds update instead of one per leaf. The leaf values are the
-// same as OctoMap's per-leaf updateNode() would give (paper Sec. III-E map, OctoMap semantics).
+// An octomap::OcTree that applies one scan in a single depth-first pass: a node whose whole
+// volume the scan saw free gets one log-odds update instead of one per leaf, and the occupied
+// voxels are updated on the same pass instead of one root-to-leaf descent each. The leaf values
+// are those OctoMap's per-voxel updateNode() would give (paper Sec. III-E map, OctoMap
+// semantics).
 
 #include <octomap/OcTree.h>
+
+#include <cstdint>
+#include <vector>
 
 #include "occupancy/free_space_grid.h"
 
@@ -15,13 +20,17 @@ class BatchOcTree : public octomap::OcTree {
  public:
   explicit BatchOcTree(double resolution_m) : octomap::OcTree(resolution_m) {}
 
-  /// Adds the miss log-odds to every voxel set in `free_space` (each once). Nodes on the visited
-  /// paths are pruned or get their inner occupancy refreshed, as non-lazy updateNode() does.
-  void ApplyFreeSpace(const FreeSpaceGrid& free_space);
+  /// Adds the miss log-odds to every voxel set in `free_space` and the hit log-odds to every
+  /// voxel in `occupied` (Morton codes, sorted and distinct, none of them set in `free_space`),
+  /// each once. Nodes on the visited paths are pruned or get their inner occupancy refreshed,
+  /// as non-lazy updateNode() does.
+  void ApplyScan(const FreeSpaceGrid& free_space, const std::vector<std::uint64_t>& occupied);
 
  private:
+  using CodeIterator = std::vector<std::uint64_t>::const_iterator;
   void Visit(octomap::OcTreeNode* node, int depth, const VoxelKey& base, bool full, bool fresh,
-             const FreeSpaceGrid& free_space);
+             const FreeSpaceGrid& free_space, CodeIterator occupied_begin,
+             CodeIterator occupied_end);
 };
 
 }  // namespace objmap::occupancy_internal

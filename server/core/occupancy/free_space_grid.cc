@@ -34,9 +34,13 @@ struct StateAccumulator {
 bool PointToKey(const Eigen::Vector3f& point, double resolution_m, VoxelKey* key) {
   const double factor = 1.0 / resolution_m;
   for (int i = 0; i < 3; ++i) {
-    const double scaled = std::floor(factor * static_cast<double>(point[i]));
+    const double scaled = factor * static_cast<double>(point[i]);
     if (!(scaled >= -kKeyOffset && scaled < kKeyOffset)) return false;  // also rejects NaN
-    (*key)[i] = static_cast<std::uint16_t>(static_cast<int>(scaled) + kKeyOffset);
+    // floor() by truncation: std::floor is a library call in plain SSE2 code, and this runs
+    // for every point of every scan.
+    const int truncated = static_cast<int>(scaled);
+    const int floored = truncated - static_cast<int>(scaled < static_cast<double>(truncated));
+    (*key)[i] = static_cast<std::uint16_t>(floored + kKeyOffset);
   }
   return true;
 }
@@ -127,6 +131,56 @@ std::int32_t FreeSpaceGrid::NewBrick(std::int64_t cell) {
   cell_to_brick_[static_cast<std::size_t>(cell)] = index;
   bricks_.push_back(Brick{});
   return index;
+}
+
+void FreeSpaceGrid::MarkBlock(const VoxelKey& base, int size_log2) {
+  if (size_log2 >= kBrickShift) {
+    const int bricks = 1 << (size_log2 - kBrickShift);
+    for (int z = 0; z < bricks; ++z) {
+      for (int y = 0; y < bricks; ++y) {
+        for (int x = 0; x < bricks; ++x) {
+          const VoxelKey corner = {static_cast<std::uint16_t>(base[0] + (x << kBrickShift)),
+                                   static_cast<std::uint16_t>(base[1] + (y << kBrickShift)),
+                                   static_cast<std::uint16_t>(base[2] + (z << kBrickShift))};
+          const std::int64_t cell = BrickCell(corner);
+          if (cell < 0) continue;
+          std::int32_t index = cell_to_brick_[static_cast<std::size_t>(cell)];
+          if (index < 0) index = NewBrick(cell);
+          bricks_[static_cast<std::size_t>(index)].fill(kAllOnes);
+        }
+      }
+    }
+    return;
+  }
+  const std::int64_t cell = BrickCell(base);
+  if (cell < 0) return;
+  std::int32_t index = cell_to_brick_[static_cast<std::size_t>(cell)];
+  if (index < 0) index = NewBrick(cell);
+  Brick& brick = bricks_[static_cast<std::size_t>(index)];
+  const int size = 1 << size_log2;
+  const std::uint64_t row = (std::uint64_t{1} << size) - 1;
+  std::uint64_t mask = 0;
+  for (int y = 0; y < size; ++y) mask |= row << ((base[0] & 7) + 8 * ((base[1] & 7) + y));
+  for (int z = 0; z < size; ++z) brick[(base[2] & 7) + z] |= mask;
+}
+
+void FreeSpaceGrid::MarkVoxels(const VoxelKey& base, int size, std::uint64_t voxels) {
+  if (voxels == 0) return;
+  const std::int64_t cell = BrickCell(base);
+  if (cell < 0) return;
+  std::int32_t index = cell_to_brick_[static_cast<std::size_t>(cell)];
+  if (index < 0) index = NewBrick(cell);
+  Brick& brick = bricks_[static_cast<std::size_t>(index)];
+  const int x0 = base[0] & 7, y0 = base[1] & 7, z0 = base[2] & 7;
+  const std::uint64_t row_mask = (std::uint64_t{1} << size) - 1;
+  for (int k = 0; k < size; ++k) {
+    std::uint64_t slice = 0;
+    for (int j = 0; j < size; ++j) {
+      const std::uint64_t row = (voxels >> (size * (j + size * k))) & row_mask;
+      slice |= row << (x0 + 8 * (y0 + j));
+    }
+    brick[static_cast<std::size_t>(z0 + k)] |= slice;
+  }
 }
 
 void FreeSpaceGrid::Clear(const VoxelKey& key) {

@@ -28,6 +28,32 @@ using VoxelKey = std::array<std::uint16_t, 3>;
           static_cast<std::uint16_t>(packed)};
 }
 
+/// Morton (octree) order of a key: interleaved bits, x lowest, so that sorted codes list the
+/// voxels depth-first in OctoMap's child order (x -> 1, y -> 2, z -> 4).
+[[nodiscard]] inline std::uint64_t SpreadBitsByThree(std::uint64_t v) {
+  v = (v | v << 32) & 0x1F00000000FFFFull;
+  v = (v | v << 16) & 0x1F0000FF0000FFull;
+  v = (v | v << 8) & 0x100F00F00F00F00Full;
+  v = (v | v << 4) & 0x10C30C30C30C30C3ull;
+  v = (v | v << 2) & 0x1249249249249249ull;
+  return v;
+}
+[[nodiscard]] inline std::uint16_t GatherBitsByThree(std::uint64_t v) {
+  v &= 0x1249249249249249ull;
+  v = (v ^ (v >> 2)) & 0x10C30C30C30C30C3ull;
+  v = (v ^ (v >> 4)) & 0x100F00F00F00F00Full;
+  v = (v ^ (v >> 8)) & 0x1F0000FF0000FFull;
+  v = (v ^ (v >> 16)) & 0x1F00000000FFFFull;
+  v = (v ^ (v >> 32)) & 0x1FFFFFull;
+  return static_cast<std::uint16_t>(v);
+}
+[[nodiscard]] inline std::uint64_t MortonCode(const VoxelKey& k) {
+  return SpreadBitsByThree(k[0]) | SpreadBitsByThree(k[1]) << 1 | SpreadBitsByThree(k[2]) << 2;
+}
+[[nodiscard]] inline VoxelKey KeyOfMortonCode(std::uint64_t code) {
+  return {GatherBitsByThree(code), GatherBitsByThree(code >> 1), GatherBitsByThree(code >> 2)};
+}
+
 enum class BlockState : std::uint8_t { kEmpty = 0, kMixed = 1, kFull = 2 };
 
 /// Thread-safety: none; one grid per integrating thread.
@@ -42,6 +68,14 @@ class FreeSpaceGrid {
   /// OcTree::computeRayKeys with the same float/double arithmetic, so the sets match exactly.
   /// Both ends must lie inside the Reset() box.
   void AddRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& end);
+
+  /// Marks the whole octree-aligned cube of 2^size_log2 voxels a side at `base` (the part of it
+  /// inside the Reset() box).
+  void MarkBlock(const VoxelKey& base, int size_log2);
+
+  /// Marks voxels of the cube of `size` (2 or 4) voxels a side at `base` (aligned to `size`):
+  /// bit i + size * (j + size * k) of `voxels` is the voxel base + (i, j, k).
+  void MarkVoxels(const VoxelKey& base, int size, std::uint64_t voxels);
 
   void Clear(const VoxelKey& key);
   [[nodiscard]] bool Test(const VoxelKey& key) const;

@@ -18,9 +18,10 @@ namespace objmap {
 namespace {
 
 using occupancy_internal::BatchOcTree;
+using occupancy_internal::KeyOfMortonCode;
+using occupancy_internal::MortonCode;
 using occupancy_internal::PackKey;
 using occupancy_internal::PointToKey;
-using occupancy_internal::UnpackKey;
 using occupancy_internal::VoxelKey;
 using Clock = std::chrono::steady_clock;
 
@@ -46,6 +47,32 @@ RayEnd ClipRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& point, doub
 }
 
 bool AllFinite(const Eigen::Vector3f& p) { return p.allFinite(); }
+
+bool HasDepth(const Eigen::Vector3f& p_C) { return p_C.allFinite() && p_C.z() > 0.f; }
+
+// The projective integration needs each point on its pixel's ray (as BackProject makes them);
+// the tolerance allows for float rounding and is well below the carver's margin.
+bool PointsLieOnPixelRays(const DepthScanW& scan) {
+  constexpr float kTolerancePx = 0.01f;
+  if (scan.width <= 0 || scan.height <= 0 ||
+      scan.points_C.size() != static_cast<std::size_t>(scan.width) * scan.height ||
+      !(std::isfinite(scan.fx) && scan.fx > 0.f && std::isfinite(scan.fy) && scan.fy > 0.f &&
+        std::isfinite(scan.cx) && std::isfinite(scan.cy)) ||
+      !scan.T_W_C.matrix().allFinite()) {
+    return false;
+  }
+  for (int v = 0; v < scan.height; ++v) {
+    for (int u = 0; u < scan.width; ++u) {
+      const Eigen::Vector3f& p = scan.points_C[static_cast<std::size_t>(v) * scan.width + u];
+      if (!HasDepth(p)) continue;
+      if (std::fabs(scan.fx * p.x() / p.z() + scan.cx - static_cast<float>(u)) > kTolerancePx ||
+          std::fabs(scan.fy * p.y() / p.z() + scan.cy - static_cast<float>(v)) > kTolerancePx) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
 
 // The free-space end of a ray to `point` that stops margin_of(range) short of it; false (no
 // ray) when the point is no farther than that from the origin.
@@ -90,42 +117,64 @@ bool OccupancyConfig::IsValid(std::string* why) const {
   return true;
 }
 
-// Turns the scan's points into free-space ray ends and occupied endpoint keys, and the key box.
-void OccupancyMap::Impl::CollectRays(const ScanW& scan) {
-  ray_ends_W.clear();
-  occupied_keys.clear();
-  const Eigen::Vector3f& origin = scan.origin_W;
-  const float margin_m = static_cast<float>(config.object_margin_voxels * config.resolution_m);
-  const bool structure_margin =
-      config.structure_margin_m > 0.0 || config.structure_margin_per_m2 > 0.0;
+ScanW ToScanW(const DepthScanW& scan) {
+  ScanW points;
+  points.origin_W = scan.T_W_C.translation();
+  const bool has_mask = scan.object_mask.size() == scan.points_C.size();
+  for (std::size_t i = 0; i < scan.points_C.size(); ++i) {
+    const Eigen::Vector3f& p_C = scan.points_C[i];
+    if (!HasDepth(p_C)) continue;
+    (has_mask && scan.object_mask[i] != 0 ? points.object_points_W : points.structure_points_W)
+        .push_back(scan.T_W_C * p_C);
+  }
+  return points;
+}
+
+OccupancyMap::Impl::PointRay OccupancyMap::Impl::RayOf(const Eigen::Vector3f& origin,
+                                                       const Eigen::Vector3f& point_W,
+                                                       bool is_object) const {
+  PointRay ray;
+  if (!AllFinite(point_W)) return ray;
   auto structure_margin_of = [this](float range_m) {
     return static_cast<float>(config.structure_margin_m +
                               config.structure_margin_per_m2 * range_m * range_m);
   };
+  RayEnd end = ClipRay(origin, point_W, config.max_range_m);
+  ray.free_end_W = end.end_W;
+  ray.carves = true;
+  if (!is_object) {
+    ray.marks_occupied =
+        end.in_range && PointToKey(point_W, config.resolution_m, &ray.occupied_key);
+    const bool structure_margin =
+        config.structure_margin_m > 0.0 || config.structure_margin_per_m2 > 0.0;
+    if (end.in_range && structure_margin) {
+      ray.carves = StopShort(origin, point_W, structure_margin_of, &ray.free_end_W);
+    }
+    return ray;
+  }
   // Object rays stop short of the object surface so they do not erase the structure it touches,
   // nor, where depth noise put the point behind it, the object's own surface.
+  const float margin_m = static_cast<float>(config.object_margin_voxels * config.resolution_m);
   auto object_margin_of = [&](float range_m) {
     return std::max(margin_m, structure_margin_of(range_m));
   };
-  for (const Eigen::Vector3f& p : scan.structure_points_W) {
-    if (!AllFinite(p)) continue;
-    RayEnd ray = ClipRay(origin, p, config.max_range_m);
-    VoxelKey key;
-    if (ray.in_range && PointToKey(p, config.resolution_m, &key)) {
-      occupied_keys.push_back(PackKey(key));
+  if (end.in_range) ray.carves = StopShort(origin, point_W, object_margin_of, &ray.free_end_W);
+  return ray;
+}
+
+// Turns the scan's points into free-space ray ends and occupied endpoint keys.
+void OccupancyMap::Impl::CollectRays(const ScanW& scan) {
+  ray_ends_W.clear();
+  occupied_keys.clear();
+  auto collect = [this, &scan](const std::vector<Eigen::Vector3f>& points, bool is_object) {
+    for (const Eigen::Vector3f& p : points) {
+      const PointRay ray = RayOf(scan.origin_W, p, is_object);
+      if (ray.marks_occupied) occupied_keys.push_back(MortonCode(ray.occupied_key));
+      if (ray.carves) ray_ends_W.push_back(ray.free_end_W);
     }
-    if (ray.in_range && structure_margin &&
-        !StopShort(origin, p, structure_margin_of, &ray.end_W)) {
-      continue;
-    }
-    ray_ends_W.push_back(ray.end_W);
-  }
-  for (const Eigen::Vector3f& p : scan.object_points_W) {
-    if (!AllFinite(p)) continue;
-    RayEnd ray = ClipRay(origin, p, config.max_range_m);
-    if (ray.in_range && !StopShort(origin, p, object_margin_of, &ray.end_W)) continue;
-    ray_ends_W.push_back(ray.end_W);
-  }
+  };
+  collect(scan.structure_points_W, false);
+  collect(scan.object_points_W, true);
   if (config.one_ray_per_end_voxel) KeepOneRayPerEndVoxel();
   std::sort(occupied_keys.begin(), occupied_keys.end());
   occupied_keys.erase(std::unique(occupied_keys.begin(), occupied_keys.end()), occupied_keys.end());
@@ -165,16 +214,43 @@ void OccupancyMap::Impl::CastRays(const Eigen::Vector3f& origin, const VoxelKey&
   ray_ends_W.resize(kept);
   grid.Reset(min_key, max_key);
   for (const Eigen::Vector3f& end : ray_ends_W) grid.AddRay(origin, end);
-  // Occupied endpoints win over free space seen in the same scan (as OcTree::computeUpdate).
-  for (std::uint64_t packed : occupied_keys) grid.Clear(UnpackKey(packed));
-  grid.BuildPyramid();
 }
 
-void OccupancyMap::Impl::ApplyOccupied() {
-  for (std::uint64_t packed : occupied_keys) {
-    const VoxelKey k = UnpackKey(packed);
-    tree.updateNode(octomap::OcTreeKey(k[0], k[1], k[2]), true, /*lazy_eval=*/false);
+void OccupancyMap::Impl::CarveDepthScan(const DepthScanW& scan) {
+  occupied_keys.clear();
+  occupancy_internal::PinholeCamera camera;
+  camera.T_W_C = scan.T_W_C;
+  camera.width = scan.width;
+  camera.height = scan.height;
+  camera.fx = scan.fx;
+  camera.fy = scan.fy;
+  camera.cx = scan.cx;
+  camera.cy = scan.cy;
+  carver.Reset(camera);
+  const Eigen::Vector3f origin = scan.T_W_C.translation();
+  const bool has_mask = scan.object_mask.size() == scan.points_C.size();
+  for (std::size_t i = 0; i < scan.points_C.size(); ++i) {
+    const Eigen::Vector3f& p_C = scan.points_C[i];
+    if (!HasDepth(p_C)) continue;
+    const PointRay ray = RayOf(origin, scan.T_W_C * p_C, has_mask && scan.object_mask[i] != 0);
+    if (ray.marks_occupied) occupied_keys.push_back(MortonCode(ray.occupied_key));
+    if (ray.carves) carver.SetRay(static_cast<int>(i), ray.free_end_W);
   }
+  std::sort(occupied_keys.begin(), occupied_keys.end());
+  occupied_keys.erase(std::unique(occupied_keys.begin(), occupied_keys.end()), occupied_keys.end());
+  carver.KeyBox(&min_key, &max_key);
+  grid.Reset(min_key, max_key);
+}
+
+void OccupancyMap::Impl::FinishPreparedScan(Clock::time_point start, std::size_t rays) {
+  // Occupied endpoints win over free space seen in the same scan (as OcTree::computeUpdate).
+  for (std::uint64_t code : occupied_keys) grid.Clear(KeyOfMortonCode(code));
+  grid.BuildPyramid();
+  stats.rays = rays;
+  stats.occupied_voxels = occupied_keys.size();
+  stats.free_voxels = grid.CountSet();
+  stats.cast_ms = MsSince(start);
+  scan_prepared = true;
 }
 
 OccupancyMap::OccupancyMap(const OccupancyConfig& config) : impl_(std::make_unique<Impl>(config)) {}
@@ -199,11 +275,31 @@ void OccupancyMap::PrepareScan(const ScanW& scan) {
   const Clock::time_point start = Clock::now();
   m.CollectRays(scan);
   m.CastRays(scan.origin_W, origin_key);
-  m.stats.rays = m.ray_ends_W.size();
-  m.stats.occupied_voxels = m.occupied_keys.size();
-  m.stats.free_voxels = m.grid.CountSet();
-  m.stats.cast_ms = MsSince(start);
-  m.scan_prepared = true;
+  m.FinishPreparedScan(start, m.ray_ends_W.size());
+}
+
+void OccupancyMap::Integrate(const DepthScanW& scan) {
+  PrepareScan(scan);
+  ApplyPreparedScan();
+}
+
+void OccupancyMap::PrepareScan(const DepthScanW& scan) {
+  if (!PointsLieOnPixelRays(scan)) {
+    PrepareScan(ToScanW(scan));
+    return;
+  }
+  Impl& m = *impl_;
+  m.stats = IntegrationStats{};
+  m.scan_prepared = false;
+  VoxelKey origin_key;
+  if (!PointToKey(scan.T_W_C.translation(), m.config.resolution_m, &origin_key)) return;
+  const Clock::time_point start = Clock::now();
+  m.CarveDepthScan(scan);
+  const occupancy_internal::CarvingStats carving = m.carver.Carve(&m.grid);
+  m.stats.projective = true;
+  m.stats.blocks_decided = carving.blocks_decided;
+  m.stats.voxels_tested = carving.voxels_tested;
+  m.FinishPreparedScan(start, m.carver.rays());
 }
 
 void OccupancyMap::ApplyPreparedScan() {
@@ -211,8 +307,7 @@ void OccupancyMap::ApplyPreparedScan() {
   if (!m.scan_prepared) return;
   m.scan_prepared = false;
   const Clock::time_point update_start = Clock::now();
-  m.tree.ApplyFreeSpace(m.grid);
-  m.ApplyOccupied();
+  m.tree.ApplyScan(m.grid, m.occupied_keys);
   m.stats.tree_update_ms = MsSince(update_start);
 }
 

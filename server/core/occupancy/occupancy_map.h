@@ -1,7 +1,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -43,6 +45,25 @@ struct ScanW {
   std::vector<Eigen::Vector3f> object_points_W;        ///< carve free space, endpoint not marked
 };
 
+/// One keyframe as an organized depth image: the same rays as the ScanW of its points (ToScanW),
+/// but the pixel grid lets OccupancyMap decide whole blocks of free space at once instead of
+/// walking every ray through every voxel (projective, coarse-to-fine carving).
+struct DepthScanW {
+  Eigen::Isometry3f T_W_C = Eigen::Isometry3f::Identity();
+  int width = 0;
+  int height = 0;
+  float fx = 0.f, fy = 0.f, cx = 0.f, cy = 0.f;  ///< pinhole model the points were made with
+  /// Row-major, width * height points in the camera frame; pixel (u, v)'s point must lie on its
+  /// ray z * ((u - cx) / fx, (v - cy) / fy, 1). Non-finite or z <= 0: no depth at the pixel.
+  std::vector<Eigen::Vector3f> points_C;
+  /// Row-major, 1 where the pixel belongs to an object (ScanW::object_points_W); empty: none.
+  std::vector<std::uint8_t> object_mask;
+};
+
+/// The points of `scan` in the world frame, split as its object mask says: the input with which
+/// the ray-by-ray integration gives what the projective one gives for `scan`.
+[[nodiscard]] ScanW ToScanW(const DepthScanW& scan);
+
 enum class VoxelState { kUnknown, kFree, kOccupied };
 
 /// Counts of leaf voxels at the map resolution (pruned nodes are expanded in the count).
@@ -57,6 +78,9 @@ struct IntegrationStats {
   std::size_t free_voxels = 0;      ///< distinct voxels updated as free
   std::size_t occupied_voxels = 0;  ///< distinct voxels updated as occupied
   double cast_ms = 0.0;             ///< ray casting into the scan's voxel set
+  bool projective = false;          ///< decided block-wise from the depth image (DepthScanW)
+  std::size_t blocks_decided = 0;   ///< projective: blocks found all free or all untouched
+  std::size_t voxels_tested = 0;    ///< projective: single voxels tested against their rays
   double tree_update_ms = 0.0;      ///< applying the updates to the OcTree
 };
 
@@ -102,6 +126,16 @@ class OccupancyMap {
   /// first step). A second PrepareScan() before the apply replaces the first.
   void PrepareScan(const ScanW& scan);
   void ApplyPreparedScan();
+
+  /// The same for a depth image, an order of magnitude faster: free space is decided for whole
+  /// octree blocks from the image (a block that every pixel ray it projects to passes through
+  /// is free, one that no ray reaches is untouched) and only blocks at surfaces and silhouettes
+  /// are refined down to single voxels, each tested exactly against the rays of the pixels it
+  /// projects to. The result equals Integrate(ToScanW(scan)) up to rays that graze a voxel's
+  /// edge (tested in tests/occupancy). A scan whose points do not lie on their pixel rays is
+  /// integrated ray by ray.
+  void Integrate(const DepthScanW& scan);
+  void PrepareScan(const DepthScanW& scan);
   [[nodiscard]] const IntegrationStats& last_stats() const;
 
   [[nodiscard]] VoxelState Query(const Eigen::Vector3d& point_W) const;
