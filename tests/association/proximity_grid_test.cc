@@ -5,6 +5,7 @@
 #include <cmath>
 #include <random>
 
+#include "objects/voxel_model.h"
 #include "test_scenes.h"
 
 namespace objmap {
@@ -50,8 +51,8 @@ struct Agreement {
 
 Agreement Compare(const VoxelModel& model, float radius_m,
                   const std::vector<Eigen::Vector3f>& queries) {
-  const ProximityGrid grid(model, radius_m);
   const std::vector<Eigen::Vector3f> model_points = model.Points().points;
+  const ProximityGrid grid(model_points, radius_m);
   Agreement agreement;
   for (const Eigen::Vector3f& p : queries) {
     const bool expected = BruteForceWithin(model_points, p, radius_m);
@@ -144,14 +145,14 @@ TEST(ProximityGrid, PointsAtTheRadiusAgreeWithBruteForce) {
 }
 
 TEST(ProximityGrid, EmptyModelMatchesNothing) {
-  const ProximityGrid grid(VoxelModel{}, 0.02f);
+  const ProximityGrid grid({}, 0.02f);
   EXPECT_TRUE(grid.empty());
   EXPECT_FALSE(grid.AnyWithin(Eigen::Vector3f::Zero()));
   EXPECT_FALSE(grid.AnyWithin(Eigen::Vector3f(1.f, 2.f, 3.f)));
 }
 
 TEST(ProximityGrid, NonFiniteQueriesMatchNothing) {
-  const ProximityGrid grid(ModelOf({{0.f, 0.f, 0.f}}), 0.02f);
+  const ProximityGrid grid({{0.f, 0.f, 0.f}}, 0.02f);
   EXPECT_TRUE(grid.AnyWithin(Eigen::Vector3f(0.01f, 0.f, 0.f)));
   EXPECT_FALSE(grid.AnyWithin(Eigen::Vector3f(std::nanf(""), 0.f, 0.f)));
   EXPECT_FALSE(grid.AnyWithin(Eigen::Vector3f(0.f, INFINITY, 0.f)));

@@ -97,14 +97,25 @@ auto TestPointsOf(const std::vector<Eigen::Vector3f>& points, std::size_t stride
   };
 }
 
-// Every `stride`-th point of a model in the order of VoxelModel::Points(), without copying it.
-auto TestPointsOf(const VoxelModel& model, std::size_t stride) {
-  return [&model, stride](const auto& visit) {
-    std::size_t index = 0;
-    model.ForEachPoint([&](const Eigen::Vector3f& p) { return index++ % stride != 0 || visit(p); });
-  };
+// How many of the test points lie inside the box `lo`..`hi` widened by `distance_m`. A point
+// outside cannot be within `distance_m` of a point inside, so when fewer than the needed matches
+// lie inside, the pair fails without building the object's grid. The widening is a little
+// generous so that rounding never leaves out a point that could match.
+std::size_t CountInWidenedBox(const std::vector<Eigen::Vector3f>& points, std::size_t stride,
+                              const Eigen::Vector3f& lo, const Eigen::Vector3f& hi,
+                              float distance_m) {
+  const float margin = distance_m * 1.001f + 1e-6f;
+  const Eigen::Array3f widened_lo = lo.array() - margin, widened_hi = hi.array() + margin;
+  std::size_t inside = 0;
+  for (std::size_t i = 0; i < points.size(); i += stride) {
+    const Eigen::Array3f p = points[i].array();
+    inside += (p >= widened_lo).all() && (p <= widened_hi).all() ? 1 : 0;
+  }
+  return inside;
 }
 
+// The matches among the test points of `points` (every stride-th, AssociationConfig::
+// max_test_points) within the grid's radius of the model.
 MatchCount CountSegmentMatches(const ProximityGrid& grid,
                                const std::vector<Eigen::Vector3f>& points,
                                const AssociationConfig& config, StopRule rule) {
@@ -113,15 +124,28 @@ MatchCount CountSegmentMatches(const ProximityGrid& grid,
                       TestPointsOf(points, stride));
 }
 
+// False when too few test points of `points` lie near the object's bounds for the fraction to
+// reach min_match_fraction at `distance_m` (see CountInWidenedBox).
+bool MayReach(const MapObject& object, const std::vector<Eigen::Vector3f>& points, float distance_m,
+              const AssociationConfig& config) {
+  const std::size_t stride = StrideFor(points.size(), config.max_test_points);
+  const std::size_t tested = (points.size() + stride - 1) / stride;
+  return CountInWidenedBox(points, stride, object.min_W, object.max_W, distance_m) >=
+         MatchesNeeded(tested, config.min_match_fraction);
+}
+
 }  // namespace
 
 // Search structures per object, valid for one model version: rebuilt only when the object's
-// model changed, so an object met by many segments and keyframes is bucketed once per change.
+// model changed, so an object met by many segments and keyframes is read once per change. The
+// model's points are read into a flat list once (walking the voxel hash costs more than
+// bucketing the list) and shared by the grids and the bounding sphere.
 struct Associator::SearchCache {
   struct Entry {
     std::uint64_t version = 0;
     std::size_t model_size = 0;
-    std::vector<std::unique_ptr<ProximityGrid>> grids;  ///< one per distance asked for
+    std::optional<std::vector<Eigen::Vector3f>> points;  ///< in VoxelModel::Points() order
+    std::vector<std::unique_ptr<ProximityGrid>> grids;   ///< one per distance asked for
     std::optional<std::pair<Eigen::Vector3f, float>> bounding_sphere;
   };
   std::unordered_map<ObjectId, Entry> entries;
@@ -137,33 +161,36 @@ struct Associator::SearchCache {
     return entry;
   }
 
+  const std::vector<Eigen::Vector3f>& PointsOf(const MapObject& object) {
+    Entry& entry = EntryOf(object);
+    if (!entry.points) {
+      entry.points.emplace();
+      entry.points->reserve(object.model_W.size());
+      object.model_W.ForEachPoint([&](const Eigen::Vector3f& p) {
+        entry.points->push_back(p);
+        return true;
+      });
+    }
+    return *entry.points;
+  }
+
   const ProximityGrid& GridOf(const MapObject& object, float distance_m) {
+    const std::vector<Eigen::Vector3f>& points = PointsOf(object);
     Entry& entry = EntryOf(object);
     for (const auto& grid : entry.grids) {
       if (grid->radius_m() == distance_m) return *grid;
     }
-    entry.grids.push_back(std::make_unique<ProximityGrid>(object.model_W, distance_m));
+    entry.grids.push_back(std::make_unique<ProximityGrid>(points, distance_m));
     return *entry.grids.back();
   }
 
   // Centroid and bounding radius of the model's points, as Candidates computes them for a list.
   const std::pair<Eigen::Vector3f, float>& BoundingSphereOf(const MapObject& object) {
+    const std::vector<Eigen::Vector3f>& points = PointsOf(object);
     Entry& entry = EntryOf(object);
     if (!entry.bounding_sphere) {
-      Eigen::Vector3f sum = Eigen::Vector3f::Zero();
-      object.model_W.ForEachPoint([&](const Eigen::Vector3f& p) {
-        sum += p;
-        return true;
-      });
-      const Eigen::Vector3f centre =
-          object.model_W.empty() ? sum
-                                 : Eigen::Vector3f(sum / static_cast<float>(entry.model_size));
-      float radius_sq = 0.f;
-      object.model_W.ForEachPoint([&](const Eigen::Vector3f& p) {
-        radius_sq = std::max(radius_sq, (p - centre).squaredNorm());
-        return true;
-      });
-      entry.bounding_sphere.emplace(centre, std::sqrt(radius_sq));
+      const Eigen::Vector3f centroid = Centroid(points);
+      entry.bounding_sphere.emplace(centroid, BoundingRadius(points, centroid));
     }
     return *entry.bounding_sphere;
   }
@@ -239,6 +266,7 @@ std::vector<std::optional<ObjectId>> Associator::AssignKeyframe(
     for (ObjectId id : Candidates(map, points_W)) {
       const MapObject& object = *map.Find(id);
       if (!ClassCompatible(object, segments[s].class_id)) continue;
+      if (!MayReach(object, points_W, config_.match_distance_m, config_)) continue;
       // Below the threshold a pair is dropped whatever its fraction, so its count may stop as
       // soon as the threshold is out of reach; a pair above it needs its fraction to rank it.
       const MatchCount count = CountSegmentMatches(cache_->GridOf(object, config_.match_distance_m),
@@ -298,12 +326,13 @@ std::vector<std::pair<ObjectId, ObjectId>> Associator::FindDuplicates(
 }
 
 bool Associator::OverlapsEnough(const MapObject& small, const MapObject& large) {
-  const std::size_t size = small.model_W.size();
-  if (size == 0) return false;
-  const std::size_t stride = StrideFor(size, config_.max_test_points);
+  const std::vector<Eigen::Vector3f>& points = cache_->PointsOf(small);
+  if (points.empty()) return false;
+  if (!MayReach(large, points, config_.duplicate_distance_m, config_)) return false;
   const ProximityGrid& grid = cache_->GridOf(large, config_.duplicate_distance_m);
-  return CountMatches(grid, (size + stride - 1) / stride, config_.min_match_fraction,
-                      StopRule::kWhenDecided, TestPointsOf(small.model_W, stride))
+  const std::size_t stride = StrideFor(points.size(), config_.max_test_points);
+  return CountMatches(grid, (points.size() + stride - 1) / stride, config_.min_match_fraction,
+                      StopRule::kWhenDecided, TestPointsOf(points, stride))
       .reaches;
 }
 

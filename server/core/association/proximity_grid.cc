@@ -37,37 +37,46 @@ constexpr double kReachSlack = 1.0 + 1e-6;
 
 }  // namespace
 
-ProximityGrid::ProximityGrid(const VoxelModel& model, float radius_m)
+ProximityGrid::ProximityGrid(const std::vector<Eigen::Vector3f>& points, float radius_m)
     : radius_m_(radius_m),
       radius_sq_(radius_m * radius_m),
       cells_per_m_(1.0 / static_cast<double>(radius_m)) {
-  std::vector<Eigen::Vector3f> unsorted;
-  std::vector<std::uint64_t> cell_of_point;
-  unsorted.reserve(model.size());
-  cell_of_point.reserve(model.size());
-  std::size_t capacity = 16;
-  while (capacity < model.size() / 2) capacity *= 2;
-  slots_.assign(capacity, Slot{});
-  Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
-  Eigen::Vector3f hi = -lo;
-  model.ForEachPoint([&](const Eigen::Vector3f& p) {
-    unsorted.push_back(p);
-    cell_of_point.push_back(Pack(CellIndexOf(p)));
-    ++FindOrInsert(cell_of_point.back())->count;
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-    return true;
-  });
+  if (points.empty()) return;
+  std::vector<std::uint64_t> cell_of_point(points.size());
+  Eigen::Vector3f lo = points.front(), hi = points.front();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    cell_of_point[i] = Pack(CellIndexOf(points[i]));
+    lo = lo.cwiseMin(points[i]);
+    hi = hi.cwiseMax(points[i]);
+  }
+  // Count the points per cell, remembering each point's slot; a table that fills up is
+  // started again twice as large (a surface has far fewer cells than points, so rarely).
+  std::vector<std::uint32_t> slot_of_point(points.size());
+  std::size_t capacity = 64;
+  while (capacity < points.size() / 4) capacity *= 2;
+  for (bool counted = false; !counted; capacity *= 2) {
+    slots_.assign(capacity, Slot{});
+    used_slots_ = 0;
+    counted = true;
+    for (std::size_t i = 0; i < points.size() && counted; ++i) {
+      const std::optional<std::uint32_t> slot = FindOrInsert(cell_of_point[i]);
+      counted = slot.has_value();
+      if (counted) {
+        slot_of_point[i] = *slot;
+        ++slots_[*slot].count;
+      }
+    }
+  }
   std::uint32_t next = 0;
   for (Slot& slot : slots_) {
     slot.begin = next;
     next += slot.count;
     slot.count = 0;
   }
-  points_.resize(unsorted.size());
-  for (std::size_t i = 0; i < unsorted.size(); ++i) {
-    Slot* slot = FindOrInsert(cell_of_point[i]);
-    points_[slot->begin + slot->count++] = unsorted[i];
+  points_.resize(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    Slot& slot = slots_[slot_of_point[i]];
+    points_[slot.begin + slot.count++] = points[i];
   }
   const float margin = radius_m * 1.001f + 1e-6f;
   reach_min_ = lo.array() - margin;
@@ -88,29 +97,16 @@ const ProximityGrid::Slot* ProximityGrid::Find(std::uint64_t cell) const {
   }
 }
 
-ProximityGrid::Slot* ProximityGrid::FindOrInsert(std::uint64_t cell) {
-  if (2 * (used_slots_ + 1) > slots_.size()) Grow();
+std::optional<std::uint32_t> ProximityGrid::FindOrInsert(std::uint64_t cell) {
   const std::size_t mask = slots_.size() - 1;
   for (std::size_t i = HashOf(cell) & mask;; i = (i + 1) & mask) {
-    if (slots_[i].cell == cell) return &slots_[i];
+    if (slots_[i].cell == cell) return static_cast<std::uint32_t>(i);
     if (slots_[i].cell == kNoCell) {
+      if (2 * (used_slots_ + 1) > slots_.size()) return std::nullopt;
       slots_[i].cell = cell;
       ++used_slots_;
-      return &slots_[i];
+      return static_cast<std::uint32_t>(i);
     }
-  }
-}
-
-// Only while counting (before begin is assigned): slots move, counts move with them.
-void ProximityGrid::Grow() {
-  std::vector<Slot> old(slots_.size() * 2, Slot{});
-  old.swap(slots_);
-  const std::size_t mask = slots_.size() - 1;
-  for (const Slot& slot : old) {
-    if (slot.cell == kNoCell) continue;
-    std::size_t i = HashOf(slot.cell) & mask;
-    while (slots_[i].cell != kNoCell) i = (i + 1) & mask;
-    slots_[i] = slot;
   }
 }
 

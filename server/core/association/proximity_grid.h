@@ -2,23 +2,22 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <optional>
 #include <vector>
-
-#include "objects/voxel_model.h"
 
 namespace objmap {
 
-/// The points of one voxel model bucketed in cubic cells of the query radius, answering "is some
+/// The points of one object model bucketed in cubic cells of the query radius, answering "is some
 /// model point within the radius of p" from the few cells the radius reaches instead of a k-d
 /// tree. The answer is exact, not approximate: a point matches when its squared distance to a
 /// model point, summed over x, y, z in that order as a nearest-neighbour search sums it, is at
-/// most radius², so it agrees with the paper's k-d tree test (Sec. III-C). Building it is one
-/// pass over the model, several times cheaper than building a tree.
+/// most radius², so it agrees with the paper's k-d tree test (Sec. III-C). Building it is two
+/// passes over the points and one hash insertion per point, several times cheaper than a tree.
 /// Thread-safety: immutable after construction; const methods may run concurrently.
 class ProximityGrid {
  public:
-  /// Buckets the model's points (one per voxel, VoxelModel::ForEachPoint) for `radius_m` > 0.
-  ProximityGrid(const VoxelModel& model, float radius_m);
+  /// Buckets `points` (an object model's, one per voxel) for queries at `radius_m` > 0.
+  ProximityGrid(const std::vector<Eigen::Vector3f>& points, float radius_m);
 
   /// True when some model point lies within radius_m of `p`.
   [[nodiscard]] bool AnyWithin(const Eigen::Vector3f& p) const;
@@ -37,8 +36,8 @@ class ProximityGrid {
 
   [[nodiscard]] Eigen::Array3i CellIndexOf(const Eigen::Vector3f& p) const;
   [[nodiscard]] const Slot* Find(std::uint64_t cell) const;
-  Slot* FindOrInsert(std::uint64_t cell);
-  void Grow();
+  /// Index of the cell's slot, inserted when new; nullopt when the table is half full.
+  [[nodiscard]] std::optional<std::uint32_t> FindOrInsert(std::uint64_t cell);
   [[nodiscard]] bool AnyWithinCell(std::uint64_t cell, const Eigen::Vector3f& p) const;
 
   float radius_m_;
