@@ -1,20 +1,14 @@
 #include "association/associator.h"
 
-#include <pcl/kdtree/kdtree_flann.h>
-#include <pcl/point_types.h>
-
 #include <algorithm>
+#include <cmath>
 #include <iterator>
 #include <unordered_map>
 
+#include "association/proximity_grid.h"
+
 namespace objmap {
 namespace {
-
-struct CachedTree {
-  std::uint64_t version = 0;
-  pcl::KdTreeFLANN<pcl::PointXYZ> tree;
-  bool empty = true;
-};
 
 Eigen::Vector3f Centroid(const std::vector<Eigen::Vector3f>& points) {
   Eigen::Vector3f sum = Eigen::Vector3f::Zero();
@@ -43,22 +37,162 @@ float ObjectRadius(const MapObject& object) {
                   (object.min_W - object.centroid_W).norm());
 }
 
+// The test points: every `stride`-th point, as many as ceil(size / stride).
+std::size_t StrideFor(std::size_t size, int max_test_points) {
+  return (size + static_cast<std::size_t>(max_test_points) - 1) /
+         static_cast<std::size_t>(max_test_points);
+}
+
+// The least number of matches among `tested` points whose fraction, computed in float as the
+// association compares it, reaches `min_fraction`; tested + 1 when none does. Stopping a count
+// at this number decides exactly as the fraction would.
+std::size_t MatchesNeeded(std::size_t tested, float min_fraction) {
+  const auto fraction_of = [tested](std::size_t m) {
+    return static_cast<float>(m) / static_cast<float>(tested);
+  };
+  auto needed = static_cast<std::size_t>(std::ceil(static_cast<double>(min_fraction) * tested));
+  while (needed > 0 && fraction_of(needed - 1) >= min_fraction) --needed;
+  while (needed <= tested && fraction_of(needed) < min_fraction) ++needed;
+  return needed;
+}
+
+// When a count of matches may stop before the last test point.
+enum class StopRule {
+  kNever,            ///< the exact fraction is wanted
+  kWhenUnreachable,  ///< a pair below the threshold is dropped; the fraction of one above ranks it
+  kWhenDecided,      ///< only whether the threshold is reached matters
+};
+
+struct MatchCount {
+  std::size_t matched = 0;
+  std::size_t tested = 0;
+  bool reaches = false;  ///< matched / tested >= the threshold (exact also after an early stop)
+};
+
+// Counts the test points that lie within the grid's radius of the model; `for_each_test_point`
+// calls its visitor with each test point until the visitor returns false.
+template <typename ForEachTestPoint>
+MatchCount CountMatches(const ProximityGrid& grid, std::size_t tested, float min_fraction,
+                        StopRule rule, const ForEachTestPoint& for_each_test_point) {
+  MatchCount count;
+  count.tested = tested;
+  const std::size_t needed = MatchesNeeded(tested, min_fraction);
+  std::size_t visited = 0;
+  for_each_test_point([&](const Eigen::Vector3f& p) {
+    ++visited;
+    if (grid.AnyWithin(p)) ++count.matched;
+    if (rule == StopRule::kWhenDecided && count.matched >= needed) return false;
+    return rule == StopRule::kNever || count.matched + (tested - visited) >= needed;
+  });
+  count.reaches = count.matched >= needed;
+  return count;
+}
+
+// Every `stride`-th point of a list, from the first.
+auto TestPointsOf(const std::vector<Eigen::Vector3f>& points, std::size_t stride) {
+  return [&points, stride](const auto& visit) {
+    for (std::size_t i = 0; i < points.size(); i += stride) {
+      if (!visit(points[i])) return;
+    }
+  };
+}
+
+// How many of the test points lie inside the box `lo`..`hi` widened by `distance_m`. A point
+// outside cannot be within `distance_m` of a point inside, so when fewer than the needed matches
+// lie inside, the pair fails without building the object's grid. The widening is a little
+// generous so that rounding never leaves out a point that could match.
+std::size_t CountInWidenedBox(const std::vector<Eigen::Vector3f>& points, std::size_t stride,
+                              const Eigen::Vector3f& lo, const Eigen::Vector3f& hi,
+                              float distance_m) {
+  const float margin = distance_m * 1.001f + 1e-6f;
+  const Eigen::Array3f widened_lo = lo.array() - margin, widened_hi = hi.array() + margin;
+  std::size_t inside = 0;
+  for (std::size_t i = 0; i < points.size(); i += stride) {
+    const Eigen::Array3f p = points[i].array();
+    inside += (p >= widened_lo).all() && (p <= widened_hi).all() ? 1 : 0;
+  }
+  return inside;
+}
+
+// The matches among the test points of `points` (every stride-th, AssociationConfig::
+// max_test_points) within the grid's radius of the model.
+MatchCount CountSegmentMatches(const ProximityGrid& grid,
+                               const std::vector<Eigen::Vector3f>& points,
+                               const AssociationConfig& config, StopRule rule) {
+  const std::size_t stride = StrideFor(points.size(), config.max_test_points);
+  return CountMatches(grid, (points.size() + stride - 1) / stride, config.min_match_fraction, rule,
+                      TestPointsOf(points, stride));
+}
+
+// False when too few test points of `points` lie near the object's bounds for the fraction to
+// reach min_match_fraction at `distance_m` (see CountInWidenedBox).
+bool MayReach(const MapObject& object, const std::vector<Eigen::Vector3f>& points, float distance_m,
+              const AssociationConfig& config) {
+  const std::size_t stride = StrideFor(points.size(), config.max_test_points);
+  const std::size_t tested = (points.size() + stride - 1) / stride;
+  return CountInWidenedBox(points, stride, object.min_W, object.max_W, distance_m) >=
+         MatchesNeeded(tested, config.min_match_fraction);
+}
+
 }  // namespace
 
-struct Associator::TreeCache {
-  std::unordered_map<ObjectId, CachedTree> trees;
+// Search structures per object, valid for one model version: rebuilt only when the object's
+// model changed, so an object met by many segments and keyframes is read once per change. The
+// model's points are read into a flat list once (walking the voxel hash costs more than
+// bucketing the list) and shared by the grids and the bounding sphere.
+struct Associator::SearchCache {
+  struct Entry {
+    std::uint64_t version = 0;
+    std::size_t model_size = 0;
+    std::optional<std::vector<Eigen::Vector3f>> points;  ///< in VoxelModel::Points() order
+    std::vector<std::unique_ptr<ProximityGrid>> grids;   ///< one per distance asked for
+    std::optional<std::pair<Eigen::Vector3f, float>> bounding_sphere;
+  };
+  std::unordered_map<ObjectId, Entry> entries;
 
-  CachedTree& TreeOf(const MapObject& object) {
-    CachedTree& cached = trees[object.id];
-    if (cached.version == object.version && !cached.empty) return cached;
-    auto cloud = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
-    for (const Eigen::Vector3f& p : object.model_W.Points().points) {
-      cloud->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
+  Entry& EntryOf(const MapObject& object) {
+    Entry& entry = entries[object.id];
+    // The size check also catches a model changed behind a caller's back without a new version.
+    if (entry.version != object.version || entry.model_size != object.model_W.size()) {
+      entry = Entry{};
+      entry.version = object.version;
+      entry.model_size = object.model_W.size();
     }
-    cached.version = object.version;
-    cached.empty = cloud->empty();
-    if (!cached.empty) cached.tree.setInputCloud(cloud);
-    return cached;
+    return entry;
+  }
+
+  const std::vector<Eigen::Vector3f>& PointsOf(const MapObject& object) {
+    Entry& entry = EntryOf(object);
+    if (!entry.points) {
+      entry.points.emplace();
+      entry.points->reserve(object.model_W.size());
+      object.model_W.ForEachPoint([&](const Eigen::Vector3f& p) {
+        entry.points->push_back(p);
+        return true;
+      });
+    }
+    return *entry.points;
+  }
+
+  const ProximityGrid& GridOf(const MapObject& object, float distance_m) {
+    const std::vector<Eigen::Vector3f>& points = PointsOf(object);
+    Entry& entry = EntryOf(object);
+    for (const auto& grid : entry.grids) {
+      if (grid->radius_m() == distance_m) return *grid;
+    }
+    entry.grids.push_back(std::make_unique<ProximityGrid>(points, distance_m));
+    return *entry.grids.back();
+  }
+
+  // Centroid and bounding radius of the model's points, as Candidates computes them for a list.
+  const std::pair<Eigen::Vector3f, float>& BoundingSphereOf(const MapObject& object) {
+    const std::vector<Eigen::Vector3f>& points = PointsOf(object);
+    Entry& entry = EntryOf(object);
+    if (!entry.bounding_sphere) {
+      const Eigen::Vector3f centroid = Centroid(points);
+      entry.bounding_sphere.emplace(centroid, BoundingRadius(points, centroid));
+    }
+    return *entry.bounding_sphere;
   }
 };
 
@@ -86,7 +220,7 @@ bool AssociationConfig::IsValid(std::string* why) const {
 }
 
 Associator::Associator(const AssociationConfig& config)
-    : config_(config), trees_(std::make_unique<TreeCache>()) {}
+    : config_(config), cache_(std::make_unique<SearchCache>()) {}
 Associator::~Associator() = default;
 Associator::Associator(Associator&&) noexcept = default;
 Associator& Associator::operator=(Associator&&) noexcept = default;
@@ -94,32 +228,23 @@ Associator& Associator::operator=(Associator&&) noexcept = default;
 float Associator::MatchFraction(const MapObject& object,
                                 const std::vector<Eigen::Vector3f>& points_W, float distance_m) {
   if (points_W.empty()) return 0.f;
-  CachedTree& cached = trees_->TreeOf(object);
-  if (cached.empty) return 0.f;
   const float distance = distance_m > 0.f ? distance_m : config_.match_distance_m;
-  const float max_sq = distance * distance;
-  std::vector<int> index(1);
-  std::vector<float> distance_sq(1);
-  const std::size_t stride = (points_W.size() + config_.max_test_points - 1) /
-                             static_cast<std::size_t>(config_.max_test_points);
-  std::size_t matched = 0;
-  std::size_t tested = 0;
-  for (std::size_t i = 0; i < points_W.size(); i += stride, ++tested) {
-    const Eigen::Vector3f& p = points_W[i];
-    if (cached.tree.nearestKSearch(pcl::PointXYZ(p.x(), p.y(), p.z()), 1, index, distance_sq) > 0 &&
-        distance_sq[0] <= max_sq) {
-      ++matched;
-    }
-  }
-  return static_cast<float>(matched) / static_cast<float>(tested);
+  const MatchCount count =
+      CountSegmentMatches(cache_->GridOf(object, distance), points_W, config_, StopRule::kNever);
+  return static_cast<float>(count.matched) / static_cast<float>(count.tested);
 }
 
 std::vector<ObjectId> Associator::Candidates(const ObjectMap& map,
                                              const std::vector<Eigen::Vector3f>& points_W) const {
-  std::vector<ObjectId> candidates;
-  if (points_W.empty()) return candidates;
+  if (points_W.empty()) return {};
   const Eigen::Vector3f centroid = Centroid(points_W);
-  const float radius = BoundingRadius(points_W, centroid);
+  return CandidatesAround(map, centroid, BoundingRadius(points_W, centroid));
+}
+
+std::vector<ObjectId> Associator::CandidatesAround(const ObjectMap& map,
+                                                   const Eigen::Vector3f& centroid,
+                                                   float radius) const {
+  std::vector<ObjectId> candidates;
   for (const auto& [id, object] : map.objects()) {
     const float reach = radius + ObjectRadius(object) + config_.candidate_margin_m;
     if ((object.centroid_W - centroid).squaredNorm() <= reach * reach) candidates.push_back(id);
@@ -136,10 +261,19 @@ std::vector<std::optional<ObjectId>> Associator::AssignKeyframe(
   };
   std::vector<Pair> pairs;
   for (std::size_t s = 0; s < segments.size(); ++s) {
-    for (ObjectId id : Candidates(map, segments[s].points_W)) {
-      if (!ClassCompatible(*map.Find(id), segments[s].class_id)) continue;
-      const float fraction = MatchFraction(*map.Find(id), segments[s].points_W);
-      if (fraction >= config_.min_match_fraction) pairs.push_back({fraction, s, id});
+    const std::vector<Eigen::Vector3f>& points_W = segments[s].points_W;
+    if (points_W.empty()) continue;
+    for (ObjectId id : Candidates(map, points_W)) {
+      const MapObject& object = *map.Find(id);
+      if (!ClassCompatible(object, segments[s].class_id)) continue;
+      if (!MayReach(object, points_W, config_.match_distance_m, config_)) continue;
+      // Below the threshold a pair is dropped whatever its fraction, so its count may stop as
+      // soon as the threshold is out of reach; a pair above it needs its fraction to rank it.
+      const MatchCount count = CountSegmentMatches(cache_->GridOf(object, config_.match_distance_m),
+                                                   points_W, config_, StopRule::kWhenUnreachable);
+      if (!count.reaches) continue;
+      pairs.push_back(
+          {static_cast<float>(count.matched) / static_cast<float>(count.tested), s, id});
     }
   }
   std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
@@ -171,8 +305,8 @@ std::vector<std::pair<ObjectId, ObjectId>> Associator::FindDuplicates(
     const MapObject* object = map.Find(id);
     if (object == nullptr || object->model_W.empty()) continue;
     if (std::find(absorbed.begin(), absorbed.end(), id) != absorbed.end()) continue;
-    const std::vector<Eigen::Vector3f> points = object->model_W.Points().points;
-    for (ObjectId other_id : Candidates(map, points)) {
+    const auto& [centroid, radius] = cache_->BoundingSphereOf(*object);
+    for (ObjectId other_id : CandidatesAround(map, centroid, radius)) {
       const MapObject& other = *map.Find(other_id);
       if (other_id == id || other.Label() != object->Label()) continue;
       if (std::find(absorbed.begin(), absorbed.end(), other_id) != absorbed.end()) continue;
@@ -182,10 +316,7 @@ std::vector<std::pair<ObjectId, ObjectId>> Associator::FindDuplicates(
       const bool object_smaller = object->model_W.size() <= other.model_W.size();
       const MapObject& small = object_smaller ? *object : other;
       const MapObject& large = object_smaller ? other : *object;
-      if (MatchFraction(large, small.model_W.Points().points, config_.duplicate_distance_m) <
-          config_.min_match_fraction) {
-        continue;
-      }
+      if (!OverlapsEnough(small, large)) continue;
       duplicates.emplace_back(large.id, small.id);
       absorbed.push_back(small.id);
       if (object_smaller) break;
@@ -194,9 +325,20 @@ std::vector<std::pair<ObjectId, ObjectId>> Associator::FindDuplicates(
   return duplicates;
 }
 
+bool Associator::OverlapsEnough(const MapObject& small, const MapObject& large) {
+  const std::vector<Eigen::Vector3f>& points = cache_->PointsOf(small);
+  if (points.empty()) return false;
+  if (!MayReach(large, points, config_.duplicate_distance_m, config_)) return false;
+  const ProximityGrid& grid = cache_->GridOf(large, config_.duplicate_distance_m);
+  const std::size_t stride = StrideFor(points.size(), config_.max_test_points);
+  return CountMatches(grid, (points.size() + stride - 1) / stride, config_.min_match_fraction,
+                      StopRule::kWhenDecided, TestPointsOf(points, stride))
+      .reaches;
+}
+
 void Associator::ForgetMissing(const ObjectMap& map) {
-  for (auto it = trees_->trees.begin(); it != trees_->trees.end();) {
-    it = map.Find(it->first) == nullptr ? trees_->trees.erase(it) : std::next(it);
+  for (auto it = cache_->entries.begin(); it != cache_->entries.end();) {
+    it = map.Find(it->first) == nullptr ? cache_->entries.erase(it) : std::next(it);
   }
 }
 

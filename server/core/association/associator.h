@@ -10,8 +10,9 @@
 
 namespace objmap {
 
-/// Data association (paper Sec. III-C): candidate objects by centroid distance, then a k-d tree
-/// nearest-neighbour test on the points.
+/// Data association (paper Sec. III-C): candidate objects by centroid distance, then the
+/// nearest-neighbour test on the points (the paper's k-d tree test, answered from a grid of the
+/// object's points with the same result).
 struct AssociationConfig {
   /// Objects whose centroid is farther from the segment's centroid than the two bounding radii
   /// plus this margin are not candidates, metres.
@@ -43,8 +44,8 @@ struct SegmentToAssociate {
   int class_id = -1;
 };
 
-/// Associates segments with objects. Keeps one k-d tree per object, rebuilt when the object's
-/// model version changes. Thread-safety: none (the tree cache is mutable state).
+/// Associates segments with objects. Keeps one ProximityGrid per object and distance, rebuilt
+/// only when the object's model version changes. Thread-safety: none (the cache is mutable state).
 class Associator {
  public:
   explicit Associator(const AssociationConfig& config);
@@ -78,15 +79,23 @@ class Associator {
   /// True when `class_id` has enough of the object's accumulated score (min_class_share).
   [[nodiscard]] bool ClassCompatible(const MapObject& object, int class_id) const;
 
-  /// Drops cached trees of objects that no longer exist.
+  /// Drops the cached search structures of objects that no longer exist.
   void ForgetMissing(const ObjectMap& map);
 
   [[nodiscard]] const AssociationConfig& config() const { return config_; }
 
  private:
-  struct TreeCache;
+  struct SearchCache;
+
+  [[nodiscard]] std::vector<ObjectId> CandidatesAround(const ObjectMap& map,
+                                                       const Eigen::Vector3f& centroid,
+                                                       float radius) const;
+  /// True when min_match_fraction of the smaller model's test points lie within
+  /// duplicate_distance_m of the larger model.
+  [[nodiscard]] bool OverlapsEnough(const MapObject& small, const MapObject& large);
+
   AssociationConfig config_;
-  std::unique_ptr<TreeCache> trees_;
+  std::unique_ptr<SearchCache> cache_;
 };
 
 }  // namespace objmap

@@ -287,7 +287,7 @@ void Mapper::Impl::Reassociate() {
     regrouped[id] = object.observations;
   }
   objects.Restore(std::move(regrouped), next_id, PoseLookup());
-  // Ids now name other models: drop the k-d trees cached for the old ones.
+  // Ids now name other models: drop the search structures cached for the old ones.
   associator = Associator(config.association);
 }
 

@@ -77,21 +77,21 @@ void ObjectMap::AddToModel(MapObject* object, const ObjectObservation& observati
 }
 
 void ObjectMap::UpdateBounds(MapObject* object) {
-  const ColoredPoints points = object->model_W.Points();
   object->version = ++last_model_version_;
-  if (points.empty()) {
+  if (object->model_W.empty()) {
     object->centroid_W = object->min_W = object->max_W = Eigen::Vector3f::Zero();
     return;
   }
   Eigen::Vector3f sum = Eigen::Vector3f::Zero();
   Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
   Eigen::Vector3f hi = -lo;
-  for (const Eigen::Vector3f& p : points.points) {
+  object->model_W.ForEachPoint([&](const Eigen::Vector3f& p) {
     sum += p;
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
-  }
-  object->centroid_W = sum / static_cast<float>(points.size());
+    return true;
+  });
+  object->centroid_W = sum / static_cast<float>(object->model_W.size());
   object->min_W = lo;
   object->max_W = hi;
 }

@@ -45,7 +45,7 @@ struct MapObject {
   Eigen::Vector3f centroid_W = Eigen::Vector3f::Zero();
   Eigen::Vector3f min_W = Eigen::Vector3f::Zero();  ///< axis-aligned bounds of the model
   Eigen::Vector3f max_W = Eigen::Vector3f::Zero();
-  /// Changes whenever the model changes, so caches (k-d trees, snapshot views) know when to
+  /// Changes whenever the model changes, so caches (association grids, snapshot views) know when to
   /// rebuild. Unique within an ObjectMap's life, also across Restore: an id that now names
   /// another model never shows a version a cache saw before.
   std::uint64_t version = 0;

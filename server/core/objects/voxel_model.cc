@@ -50,9 +50,8 @@ ColoredPoints VoxelModel::Points() const {
   out.points.reserve(voxels_.size());
   out.colors.reserve(voxels_.size());
   for (const auto& [key, voxel] : voxels_) {
-    const double inv = 1.0 / voxel.count;
-    out.points.push_back((voxel.sum_xyz * inv).cast<float>());
-    const Eigen::Vector3d rgb = voxel.sum_rgb * inv;
+    out.points.push_back(MeanOf(voxel));
+    const Eigen::Vector3d rgb = voxel.sum_rgb * (1.0 / voxel.count);
     out.colors.push_back({static_cast<std::uint8_t>(std::lround(rgb.x())),
                           static_cast<std::uint8_t>(std::lround(rgb.y())),
                           static_cast<std::uint8_t>(std::lround(rgb.z()))});

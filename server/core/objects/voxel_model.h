@@ -37,6 +37,15 @@ class VoxelModel {
   /// the same sequence of insertions.
   [[nodiscard]] ColoredPoints Points() const;
 
+  /// Calls `visit(point)` with each point of Points(), in the same order and with the same
+  /// values, without copying the model; stops early when `visit` returns false.
+  template <typename Visit>
+  void ForEachPoint(Visit&& visit) const {
+    for (const auto& [key, voxel] : voxels_) {
+      if (!visit(MeanOf(voxel))) return;
+    }
+  }
+
  private:
   struct Accumulator {
     Eigen::Vector3d sum_xyz = Eigen::Vector3d::Zero();
@@ -44,6 +53,9 @@ class VoxelModel {
     std::uint32_t count = 0;
   };
   [[nodiscard]] std::uint64_t KeyOf(const Eigen::Vector3f& p) const;
+  [[nodiscard]] static Eigen::Vector3f MeanOf(const Accumulator& voxel) {
+    return (voxel.sum_xyz * (1.0 / voxel.count)).cast<float>();
+  }
 
   float voxel_size_m_;
   std::unordered_map<std::uint64_t, Accumulator> voxels_;
