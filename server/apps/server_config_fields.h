@@ -77,6 +77,10 @@ void VisitMapModel(MapperConfig* m, Visitor& v) {
   v("enabled", &r.enabled);
   v("min_translation_m", &r.min_translation_m);
   v("min_rotation_rad", &r.min_rotation_rad);
+  RegenerationConfig& g = m->regeneration;
+  v.Section("regeneration");
+  v("threads", &g.threads);
+  v("incremental_max_moved_fraction", &g.incremental_max_moved_fraction);
 }
 
 template <typename Visitor>

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -212,6 +213,47 @@ TEST_F(MapperScene, NonRigidCorrectionReassociatesAndKeepsTheIdsOfTheObjectsThat
   ASSERT_TRUE(kept.UpdatePoses({{3, Pose(2)}}, &why, &report)) << why;
   EXPECT_FALSE(report.reassociated);
   EXPECT_EQ(kept.objects().size(), 4u);
+}
+
+// Correcting one keyframe of three rebuilds the OctoMap only where that keyframe's rays reach;
+// the map is the one a full rebuild gives.
+TEST_F(MapperScene, CorrectingAFewKeyframesRebuildsOnlyWhereTheySeeWithTheSameMap) {
+  Eigen::Isometry3d drifted = Pose(2);
+  drifted.pretranslate(Eigen::Vector3d(0.0, 0.04, 0.01));
+  MapperConfig incremental;
+  MapperConfig full;
+  full.regeneration.incremental_max_moved_fraction = 0.f;
+  Mapper a{incremental}, b{full};
+  for (Mapper* mapper : {&a, &b}) {
+    for (int view = 0; view < 3; ++view) {
+      RgbdFrame frame = Frame(view);
+      if (view == 2) frame.T_W_C = drifted;
+      KeyframeResult result;
+      std::string why;
+      ASSERT_TRUE(mapper->AddKeyframe(frame, CupDetections(view), &result, &why)) << why;
+    }
+  }
+  const OccupancyCounts drifted_counts = a.occupancy().Counts();
+  std::string why;
+  PoseUpdateReport report_a, report_b;
+  ASSERT_TRUE(a.UpdatePoses({{3, Pose(2)}}, &why, &report_a)) << why;
+  ASSERT_TRUE(b.UpdatePoses({{3, Pose(2)}}, &why, &report_b)) << why;
+  EXPECT_TRUE(report_a.occupancy_incremental);
+  EXPECT_FALSE(report_b.occupancy_incremental);
+  EXPECT_EQ(report_b.keyframes_reintegrated, 3);
+  EXPECT_GE(report_a.keyframes_reintegrated, 1);
+  const OccupancyCounts counts_a = a.occupancy().Counts(), counts_b = b.occupancy().Counts();
+  EXPECT_EQ(counts_a.occupied, counts_b.occupied);
+  EXPECT_EQ(counts_a.free, counts_b.free);
+  EXPECT_NE(counts_a.occupied, drifted_counts.occupied) << "the correction changed the map";
+  std::vector<Eigen::Vector3d> occupied_a = a.occupancy().OccupiedVoxelCenters();
+  std::vector<Eigen::Vector3d> occupied_b = b.occupancy().OccupiedVoxelCenters();
+  auto by_coordinates = [](const Eigen::Vector3d& p, const Eigen::Vector3d& q) {
+    return std::lexicographical_compare(p.data(), p.data() + 3, q.data(), q.data() + 3);
+  };
+  std::sort(occupied_a.begin(), occupied_a.end(), by_coordinates);
+  std::sort(occupied_b.begin(), occupied_b.end(), by_coordinates);
+  EXPECT_TRUE(occupied_a == occupied_b);
 }
 
 TEST_F(MapperScene, RestoreLoadsAUsableCheckpointAndIntegratesOnlyTheLaterKeyframes) {

@@ -167,10 +167,22 @@ bool ReassociationConfig::IsValid(std::string* why) const {
   return true;
 }
 
+bool RegenerationConfig::IsValid(std::string* why) const {
+  if (threads < 1 || threads > 64) {
+    *why = "RegenerationConfig: threads must lie in [1, 64]";
+    return false;
+  }
+  if (!(incremental_max_moved_fraction >= 0.f && incremental_max_moved_fraction <= 1.f)) {
+    *why = "RegenerationConfig: incremental_max_moved_fraction must lie in [0, 1]";
+    return false;
+  }
+  return true;
+}
+
 bool MapperConfig::IsValid(std::string* why) const {
   if (!segmenter.IsValid(why) || !detection_segment.IsValid(why) || !association.IsValid(why) ||
       !objects.IsValid(why) || !occupancy.IsValid(why) || !inventory.IsValid(why) ||
-      !reassociation.IsValid(why)) {
+      !reassociation.IsValid(why) || !regeneration.IsValid(why)) {
     return false;
   }
   if (!(min_detection_score >= 0.f && min_detection_score <= 1.f)) {
@@ -210,9 +222,15 @@ struct Mapper::Impl {
   std::map<KeyframeId, KeyframeRecord> keyframes;
   KeyframeId next_keyframe_id = 1;
 
+  // Camera-frame reach of each keyframe's rays (ReachInCameraFrame), filled when first needed.
+  std::map<KeyframeId, Eigen::AlignedBox3d> reach_C;
+
   void Reassociate();
   KeyframePoseLookup PoseLookup() const;
   void RebuildOccupancy();
+  const Eigen::AlignedBox3d& ReachOf(KeyframeId id);
+  void RegenerateOccupancy(const std::map<KeyframeId, Eigen::Isometry3d>& old_poses,
+                           PoseUpdateReport* report);
   bool RestoreOccupancy(const OccupancyCheckpoint& checkpoint, int* integrated, std::string* why);
 };
 
@@ -329,10 +347,57 @@ bool Mapper::Impl::RestoreOccupancy(const OccupancyCheckpoint& checkpoint, int* 
 
 // Built off to the side so readers keep the previous map until the swap.
 void Mapper::Impl::RebuildOccupancy() {
+  std::vector<const KeyframeRecord*> records;
+  for (const auto& [id, record] : keyframes) records.push_back(&record);
   auto rebuilt = std::make_unique<OccupancyMap>(config.occupancy);
-  for (const auto& [id, record] : keyframes) rebuilt->Integrate(ToScan(record));
+  rebuilt->IntegrateSequence(
+      records.size(), [&records](std::size_t i) { return ToScan(*records[i]); },
+      config.regeneration.threads);
   std::unique_lock<std::shared_mutex> lock(occupancy_mutex);
   occupancy.swap(rebuilt);
+}
+
+const Eigen::AlignedBox3d& Mapper::Impl::ReachOf(KeyframeId id) {
+  auto it = reach_C.find(id);
+  if (it != reach_C.end()) return it->second;
+  // Two voxels: a voxel holding a point reaches one diagonal beyond it.
+  const double margin_m = 2.0 * config.occupancy.resolution_m;
+  return reach_C.emplace(id, ReachInCameraFrame(ToScan(keyframes.at(id)), margin_m)).first->second;
+}
+
+// Rebuilds the OctoMap after the keyframes in `old_poses` moved: only where their rays reach
+// (before or after) when few moved, from every keyframe whose rays reach in there, in order.
+void Mapper::Impl::RegenerateOccupancy(const std::map<KeyframeId, Eigen::Isometry3d>& old_poses,
+                                       PoseUpdateReport* report) {
+  const double moved_fraction =
+      static_cast<double>(old_poses.size()) / static_cast<double>(keyframes.size());
+  if (moved_fraction > config.regeneration.incremental_max_moved_fraction) {
+    RebuildOccupancy();
+    report->keyframes_reintegrated = static_cast<int>(keyframes.size());
+    return;
+  }
+  std::vector<Eigen::AlignedBox3d> regions;
+  for (const auto& [id, old_pose] : old_poses) {
+    regions.push_back(ReachInWorld(ReachOf(id), old_pose));
+    regions.push_back(ReachInWorld(ReachOf(id), keyframes.at(id).T_W_C));
+  }
+  std::vector<const KeyframeRecord*> reaching;
+  for (const auto& [id, record] : keyframes) {
+    const Eigen::AlignedBox3d reach = ReachInWorld(ReachOf(id), record.T_W_C);
+    if (std::any_of(regions.begin(), regions.end(), [&reach](const Eigen::AlignedBox3d& region) {
+          return reach.intersects(region);
+        })) {
+      reaching.push_back(&record);
+    }
+  }
+  auto updated = std::make_unique<OccupancyMap>(occupancy->Clone());
+  updated->RegenerateRegions(
+      regions, reaching.size(), [&reaching](std::size_t i) { return ToScan(*reaching[i]); },
+      config.regeneration.threads);
+  report->occupancy_incremental = true;
+  report->keyframes_reintegrated = static_cast<int>(reaching.size());
+  std::unique_lock<std::shared_mutex> lock(occupancy_mutex);
+  occupancy.swap(updated);
 }
 
 Mapper::Mapper(const MapperConfig& config) : impl_(std::make_unique<Impl>(config)) {
@@ -398,9 +463,11 @@ bool Mapper::UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses, s
   const bool reassociate =
       reassociation.enabled && !IsRigidCorrection(impl_->keyframes, poses, reassociation);
   std::set<KeyframeId> moved;
+  std::map<KeyframeId, Eigen::Isometry3d> old_poses;
   for (const auto& [id, T_W_C] : poses) {
     KeyframeRecord& record = impl_->keyframes[id];
     if (IsSamePose(record.T_W_C, T_W_C)) continue;
+    old_poses[id] = record.T_W_C;
     record.T_W_C = T_W_C;
     moved.insert(id);
   }
@@ -416,7 +483,7 @@ bool Mapper::UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses, s
     impl_->objects.RebuildObserving(moved, impl_->PoseLookup());
   }
   report->objects_after = static_cast<int>(impl_->objects.size());
-  impl_->RebuildOccupancy();
+  impl_->RegenerateOccupancy(old_poses, report);
   return true;
 }
 
@@ -429,6 +496,7 @@ RestoreOutcome Mapper::Restore(std::map<KeyframeId, KeyframeRecord> keyframes,
                                std::map<ObjectId, std::vector<ObjectObservation>> observations,
                                ObjectId next_object_id, const OccupancyCheckpoint* checkpoint) {
   impl_->keyframes = std::move(keyframes);
+  impl_->reach_C.clear();
   impl_->next_keyframe_id =
       impl_->keyframes.empty() ? 1 : impl_->keyframes.rbegin()->first + 1;
   impl_->objects.Restore(std::move(observations), next_object_id, impl_->PoseLookup());

@@ -51,6 +51,20 @@ struct ReassociationConfig {
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
 
+/// How a pose update rebuilds the OctoMap.
+struct RegenerationConfig {
+  /// Keyframes whose rays are cast at once (the OcTree still takes them in order, so the map is
+  /// the same for any number).
+  int threads = 2;
+  /// When at most this fraction of the keyframes moved, the map is rebuilt only inside the
+  /// space those keyframes' rays reach (before and after the update), from the keyframes that
+  /// reach into it; the result is the same as rebuilding everything. Above it, everything is
+  /// rebuilt (cheaper than clearing most of the map).
+  float incremental_max_moved_fraction = 0.5f;
+
+  [[nodiscard]] bool IsValid(std::string* why) const;
+};
+
 /// The aggregate configuration of the mapping pipeline: one struct per component.
 struct MapperConfig {
   SegmenterConfig segmenter;
@@ -60,6 +74,7 @@ struct MapperConfig {
   OccupancyConfig occupancy;
   InventoryConfig inventory;
   ReassociationConfig reassociation;
+  RegenerationConfig regeneration;
   /// Detections scoring lower are ignored.
   float min_detection_score = 0.15f;
   /// Segments with fewer points after model downsampling are dropped (too small to model).
@@ -121,6 +136,10 @@ struct PoseUpdateReport {
   bool reassociated = false;
   int objects_before = 0;
   int objects_after = 0;
+  /// The OctoMap was rebuilt only where the moved keyframes' rays reach, before and after
+  /// (RegenerationConfig), from this many keyframes; otherwise from all of them.
+  bool occupancy_incremental = false;
+  int keyframes_reintegrated = 0;
 };
 
 /// What the mapper keeps of a keyframe to regenerate the map after its pose changes: the depth

@@ -1,6 +1,26 @@
 #include "occupancy/batch_octree.h"
 
 namespace objmap::occupancy_internal {
+namespace {
+
+enum class RegionOverlap { kOutside, kPartly, kInside };
+
+RegionOverlap OverlapOf(const std::vector<KeyBox>& regions, const VoxelKey& base, int size) {
+  bool touched = false;
+  for (const KeyBox& box : regions) {
+    if (box.Contains(base, size)) return RegionOverlap::kInside;
+    touched |= box.Touches(base, size);
+  }
+  return touched ? RegionOverlap::kPartly : RegionOverlap::kOutside;
+}
+
+VoxelKey ChildBase(const VoxelKey& base, unsigned int child, int half) {
+  return {static_cast<std::uint16_t>(base[0] + ((child & 1) ? half : 0)),
+          static_cast<std::uint16_t>(base[1] + ((child & 2) ? half : 0)),
+          static_cast<std::uint16_t>(base[2] + ((child & 4) ? half : 0))};
+}
+
+}  // namespace
 
 void BatchOcTree::ApplyScan(const FreeSpaceGrid& free_space,
                             const std::vector<std::uint64_t>& occupied) {
@@ -41,9 +61,7 @@ void BatchOcTree::Visit(octomap::OcTreeNode* node, int depth, const VoxelKey& ba
   for (unsigned int c = 0; c < 8; ++c) {
     CodeIterator child_end = child_begin;
     while (child_end != occupied_end && ((*child_end >> child_shift) & 7u) == c) ++child_end;
-    const VoxelKey child_base = {static_cast<std::uint16_t>(base[0] + ((c & 1) ? half : 0)),
-                                 static_cast<std::uint16_t>(base[1] + ((c & 2) ? half : 0)),
-                                 static_cast<std::uint16_t>(base[2] + ((c & 4) ? half : 0))};
+    const VoxelKey child_base = ChildBase(base, c, half);
     const BlockState state = full ? BlockState::kFull : free_space.State(depth + 1, child_base);
     if (state != BlockState::kEmpty || child_begin != child_end) {
       const bool child_fresh = !nodeChildExists(node, c);
@@ -54,6 +72,53 @@ void BatchOcTree::Visit(octomap::OcTreeNode* node, int depth, const VoxelKey& ba
     child_begin = child_end;
   }
   if (!pruneNode(node)) node->updateOccupancyChildren();
+}
+
+void BatchOcTree::ClearRegions(const std::vector<KeyBox>& regions) {
+  if (root == nullptr || regions.empty()) return;
+  if (ClearVisit(root, 0, {0, 0, 0}, regions)) clear();
+  size_changed = true;
+}
+
+bool BatchOcTree::ClearVisit(octomap::OcTreeNode* node, int depth, const VoxelKey& base,
+                             const std::vector<KeyBox>& regions) {
+  const int size = 1 << (kTreeDepth - depth);
+  const RegionOverlap overlap = OverlapOf(regions, base, size);
+  if (overlap == RegionOverlap::kOutside) return false;
+  if (overlap == RegionOverlap::kInside) {
+    if (nodeHasChildren(node)) CollapseToLeaf(node);
+    return true;
+  }
+  // Partly inside, so bigger than a voxel. A pruned block splits into its eight children first.
+  if (!nodeHasChildren(node)) expandNode(node);
+  const int half = size / 2;
+  for (unsigned int c = 0; c < 8; ++c) {
+    if (!nodeChildExists(node, c)) continue;
+    if (ClearVisit(getNodeChild(node, c), depth + 1, ChildBase(base, c, half), regions)) {
+      deleteNodeChild(node, c);
+    }
+  }
+  if (nodeHasChildren(node)) {
+    node->updateOccupancyChildren();
+    return false;
+  }
+  // Without children an inner node would read as a known leaf: it goes too.
+  CollapseToLeaf(node);
+  return true;
+}
+
+// OctoMap frees a node's child array only when pruning, and deleting a node that still holds one
+// would leak it: so the subtree is filled up to eight equal leaves per node and pruned bottom-up.
+void BatchOcTree::CollapseToLeaf(octomap::OcTreeNode* node) {
+  for (unsigned int c = 0; c < 8; ++c) {
+    if (!nodeChildExists(node, c)) {
+      createNodeChild(node, c);
+    } else if (nodeHasChildren(getNodeChild(node, c))) {
+      CollapseToLeaf(getNodeChild(node, c));
+    }
+    getNodeChild(node, c)->setLogOdds(0.f);
+  }
+  pruneNode(node);
 }
 
 }  // namespace objmap::occupancy_internal

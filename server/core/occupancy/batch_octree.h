@@ -26,11 +26,20 @@ class BatchOcTree : public octomap::OcTree {
   /// as non-lazy updateNode() does.
   void ApplyScan(const FreeSpaceGrid& free_space, const std::vector<std::uint64_t>& occupied);
 
+  /// Deletes every voxel inside the regions (they become unknown); nodes outside keep their
+  /// values, and inner nodes on the way get their occupancy refreshed.
+  void ClearRegions(const std::vector<KeyBox>& regions);
+
  private:
   using CodeIterator = std::vector<std::uint64_t>::const_iterator;
   void Visit(octomap::OcTreeNode* node, int depth, const VoxelKey& base, bool full, bool fresh,
              const FreeSpaceGrid& free_space, CodeIterator occupied_begin,
              CodeIterator occupied_end);
+  // True when `node` must go (all of it lies in the regions); it is then a leaf.
+  bool ClearVisit(octomap::OcTreeNode* node, int depth, const VoxelKey& base,
+                  const std::vector<KeyBox>& regions);
+  // Turns `node` into a leaf, its subtree pruned away, so that it can be deleted.
+  void CollapseToLeaf(octomap::OcTreeNode* node);
 };
 
 }  // namespace objmap::occupancy_internal

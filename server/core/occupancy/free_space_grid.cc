@@ -183,6 +183,38 @@ void FreeSpaceGrid::MarkVoxels(const VoxelKey& base, int size, std::uint64_t vox
   }
 }
 
+void FreeSpaceGrid::KeepOnly(const std::vector<KeyBox>& regions) {
+  for (int z = 0; z < dims_[2]; ++z) {
+    for (int y = 0; y < dims_[1]; ++y) {
+      for (int x = 0; x < dims_[0]; ++x) {
+        const std::int32_t index =
+            cell_to_brick_[(static_cast<std::size_t>(z) * dims_[1] + y) * dims_[0] + x];
+        if (index < 0) continue;
+        const VoxelKey corner = {static_cast<std::uint16_t>((lo_[0] + x) << kBrickShift),
+                                 static_cast<std::uint16_t>((lo_[1] + y) << kBrickShift),
+                                 static_cast<std::uint16_t>((lo_[2] + z) << kBrickShift)};
+        // The brick's voxels inside the union of the boxes, slice by slice.
+        Brick keep{};
+        for (const KeyBox& box : regions) {
+          if (!box.Touches(corner, 8)) continue;
+          int from[3], to[3];
+          for (int a = 0; a < 3; ++a) {
+            from[a] = std::max(0, box.lo[a] - corner[a]);
+            to[a] = std::min(7, box.hi[a] - corner[a]);
+          }
+          std::uint64_t slice = 0;
+          for (int j = from[1]; j <= to[1]; ++j) {
+            for (int i = from[0]; i <= to[0]; ++i) slice |= std::uint64_t{1} << (i + 8 * j);
+          }
+          for (int k = from[2]; k <= to[2]; ++k) keep[static_cast<std::size_t>(k)] |= slice;
+        }
+        Brick& brick = bricks_[static_cast<std::size_t>(index)];
+        for (std::size_t k = 0; k < 8; ++k) brick[k] &= keep[k];
+      }
+    }
+  }
+}
+
 void FreeSpaceGrid::Clear(const VoxelKey& key) {
   const std::int64_t cell = BrickCell(key);
   if (cell < 0 || cell_to_brick_[static_cast<std::size_t>(cell)] < 0) return;

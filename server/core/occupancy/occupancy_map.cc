@@ -18,11 +18,6 @@ namespace objmap {
 namespace {
 
 using occupancy_internal::BatchOcTree;
-using occupancy_internal::KeyOfMortonCode;
-using occupancy_internal::MortonCode;
-using occupancy_internal::PackKey;
-using occupancy_internal::PointToKey;
-using occupancy_internal::VoxelKey;
 using Clock = std::chrono::steady_clock;
 
 double MsSince(Clock::time_point start) {
@@ -30,62 +25,6 @@ double MsSince(Clock::time_point start) {
 }
 
 bool IsProbability(double p) { return std::isfinite(p) && p > 0.0 && p < 1.0; }
-
-// Where the free-space ray of one point ends, following OcTree::computeUpdate: rays longer than
-// max_range stop at max_range (float arithmetic as OctoMap, for identical voxel sets).
-struct RayEnd {
-  Eigen::Vector3f end_W;
-  bool in_range = false;  // true when the point itself is within max_range
-};
-
-RayEnd ClipRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& point, double max_range_m) {
-  const Eigen::Vector3f d = point - origin;
-  const double norm = std::sqrt(static_cast<double>(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
-  if (max_range_m < 0.0 || norm <= max_range_m) return {point, true};
-  const Eigen::Vector3f direction = d / static_cast<float>(norm);
-  return {origin + direction * static_cast<float>(max_range_m), false};
-}
-
-bool AllFinite(const Eigen::Vector3f& p) { return p.allFinite(); }
-
-bool HasDepth(const Eigen::Vector3f& p_C) { return p_C.allFinite() && p_C.z() > 0.f; }
-
-// The projective integration needs each point on its pixel's ray (as BackProject makes them);
-// the tolerance allows for float rounding and is well below the carver's margin.
-bool PointsLieOnPixelRays(const DepthScanW& scan) {
-  constexpr float kTolerancePx = 0.01f;
-  if (scan.width <= 0 || scan.height <= 0 ||
-      scan.points_C.size() != static_cast<std::size_t>(scan.width) * scan.height ||
-      !(std::isfinite(scan.fx) && scan.fx > 0.f && std::isfinite(scan.fy) && scan.fy > 0.f &&
-        std::isfinite(scan.cx) && std::isfinite(scan.cy)) ||
-      !scan.T_W_C.matrix().allFinite()) {
-    return false;
-  }
-  for (int v = 0; v < scan.height; ++v) {
-    for (int u = 0; u < scan.width; ++u) {
-      const Eigen::Vector3f& p = scan.points_C[static_cast<std::size_t>(v) * scan.width + u];
-      if (!HasDepth(p)) continue;
-      if (std::fabs(scan.fx * p.x() / p.z() + scan.cx - static_cast<float>(u)) > kTolerancePx ||
-          std::fabs(scan.fy * p.y() / p.z() + scan.cy - static_cast<float>(v)) > kTolerancePx) {
-        return false;
-      }
-    }
-  }
-  return true;
-}
-
-// The free-space end of a ray to `point` that stops margin_of(range) short of it; false (no
-// ray) when the point is no farther than that from the origin.
-template <typename MarginOf>
-bool StopShort(const Eigen::Vector3f& origin, const Eigen::Vector3f& point, MarginOf margin_of,
-               Eigen::Vector3f* end_W) {
-  const Eigen::Vector3f d = point - origin;
-  const float length = d.norm();
-  const float margin_m = margin_of(length);
-  if (length <= margin_m) return false;
-  *end_W = point - d * (margin_m / length);
-  return true;
-}
 
 }  // namespace
 
@@ -117,146 +56,21 @@ bool OccupancyConfig::IsValid(std::string* why) const {
   return true;
 }
 
-ScanW ToScanW(const DepthScanW& scan) {
-  ScanW points;
-  points.origin_W = scan.T_W_C.translation();
-  const bool has_mask = scan.object_mask.size() == scan.points_C.size();
-  for (std::size_t i = 0; i < scan.points_C.size(); ++i) {
-    const Eigen::Vector3f& p_C = scan.points_C[i];
-    if (!HasDepth(p_C)) continue;
-    (has_mask && scan.object_mask[i] != 0 ? points.object_points_W : points.structure_points_W)
-        .push_back(scan.T_W_C * p_C);
-  }
-  return points;
-}
-
-OccupancyMap::Impl::PointRay OccupancyMap::Impl::RayOf(const Eigen::Vector3f& origin,
-                                                       const Eigen::Vector3f& point_W,
-                                                       bool is_object) const {
-  PointRay ray;
-  if (!AllFinite(point_W)) return ray;
-  auto structure_margin_of = [this](float range_m) {
-    return static_cast<float>(config.structure_margin_m +
-                              config.structure_margin_per_m2 * range_m * range_m);
-  };
-  RayEnd end = ClipRay(origin, point_W, config.max_range_m);
-  ray.free_end_W = end.end_W;
-  ray.carves = true;
-  if (!is_object) {
-    ray.marks_occupied =
-        end.in_range && PointToKey(point_W, config.resolution_m, &ray.occupied_key);
-    const bool structure_margin =
-        config.structure_margin_m > 0.0 || config.structure_margin_per_m2 > 0.0;
-    if (end.in_range && structure_margin) {
-      ray.carves = StopShort(origin, point_W, structure_margin_of, &ray.free_end_W);
-    }
-    return ray;
-  }
-  // Object rays stop short of the object surface so they do not erase the structure it touches,
-  // nor, where depth noise put the point behind it, the object's own surface.
-  const float margin_m = static_cast<float>(config.object_margin_voxels * config.resolution_m);
-  auto object_margin_of = [&](float range_m) {
-    return std::max(margin_m, structure_margin_of(range_m));
-  };
-  if (end.in_range) ray.carves = StopShort(origin, point_W, object_margin_of, &ray.free_end_W);
-  return ray;
-}
-
-// Turns the scan's points into free-space ray ends and occupied endpoint keys.
-void OccupancyMap::Impl::CollectRays(const ScanW& scan) {
-  ray_ends_W.clear();
-  occupied_keys.clear();
-  auto collect = [this, &scan](const std::vector<Eigen::Vector3f>& points, bool is_object) {
-    for (const Eigen::Vector3f& p : points) {
-      const PointRay ray = RayOf(scan.origin_W, p, is_object);
-      if (ray.marks_occupied) occupied_keys.push_back(MortonCode(ray.occupied_key));
-      if (ray.carves) ray_ends_W.push_back(ray.free_end_W);
-    }
-  };
-  collect(scan.structure_points_W, false);
-  collect(scan.object_points_W, true);
-  if (config.one_ray_per_end_voxel) KeepOneRayPerEndVoxel();
-  std::sort(occupied_keys.begin(), occupied_keys.end());
-  occupied_keys.erase(std::unique(occupied_keys.begin(), occupied_keys.end()), occupied_keys.end());
-}
-
-// Rays to points in the same end voxel cross nearly the same voxels; keep the first of each.
-void OccupancyMap::Impl::KeepOneRayPerEndVoxel() {
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed;
-  keyed.reserve(ray_ends_W.size());
-  for (std::size_t i = 0; i < ray_ends_W.size(); ++i) {
-    VoxelKey key;
-    if (PointToKey(ray_ends_W[i], config.resolution_m, &key)) {
-      keyed.emplace_back(PackKey(key), static_cast<std::uint32_t>(i));
-    }
-  }
-  std::sort(keyed.begin(), keyed.end());
-  std::vector<Eigen::Vector3f> kept;
-  kept.reserve(keyed.size());
-  for (std::size_t i = 0; i < keyed.size(); ++i) {
-    if (i == 0 || keyed[i].first != keyed[i - 1].first) kept.push_back(ray_ends_W[keyed[i].second]);
-  }
-  ray_ends_W.swap(kept);
-}
-
-void OccupancyMap::Impl::CastRays(const Eigen::Vector3f& origin, const VoxelKey& origin_key) {
-  min_key = max_key = origin_key;
-  std::size_t kept = 0;
-  for (const Eigen::Vector3f& end : ray_ends_W) {
-    VoxelKey key;
-    if (!PointToKey(end, config.resolution_m, &key)) continue;
-    for (int i = 0; i < 3; ++i) {
-      min_key[i] = std::min(min_key[i], key[i]);
-      max_key[i] = std::max(max_key[i], key[i]);
-    }
-    ray_ends_W[kept++] = end;
-  }
-  ray_ends_W.resize(kept);
-  grid.Reset(min_key, max_key);
-  for (const Eigen::Vector3f& end : ray_ends_W) grid.AddRay(origin, end);
-}
-
-void OccupancyMap::Impl::CarveDepthScan(const DepthScanW& scan) {
-  occupied_keys.clear();
-  occupancy_internal::PinholeCamera camera;
-  camera.T_W_C = scan.T_W_C;
-  camera.width = scan.width;
-  camera.height = scan.height;
-  camera.fx = scan.fx;
-  camera.fy = scan.fy;
-  camera.cx = scan.cx;
-  camera.cy = scan.cy;
-  carver.Reset(camera);
-  const Eigen::Vector3f origin = scan.T_W_C.translation();
-  const bool has_mask = scan.object_mask.size() == scan.points_C.size();
-  for (std::size_t i = 0; i < scan.points_C.size(); ++i) {
-    const Eigen::Vector3f& p_C = scan.points_C[i];
-    if (!HasDepth(p_C)) continue;
-    const PointRay ray = RayOf(origin, scan.T_W_C * p_C, has_mask && scan.object_mask[i] != 0);
-    if (ray.marks_occupied) occupied_keys.push_back(MortonCode(ray.occupied_key));
-    if (ray.carves) carver.SetRay(static_cast<int>(i), ray.free_end_W);
-  }
-  std::sort(occupied_keys.begin(), occupied_keys.end());
-  occupied_keys.erase(std::unique(occupied_keys.begin(), occupied_keys.end()), occupied_keys.end());
-  carver.KeyBox(&min_key, &max_key);
-  grid.Reset(min_key, max_key);
-}
-
-void OccupancyMap::Impl::FinishPreparedScan(Clock::time_point start, std::size_t rays) {
-  // Occupied endpoints win over free space seen in the same scan (as OcTree::computeUpdate).
-  for (std::uint64_t code : occupied_keys) grid.Clear(KeyOfMortonCode(code));
-  grid.BuildPyramid();
-  stats.rays = rays;
-  stats.occupied_voxels = occupied_keys.size();
-  stats.free_voxels = grid.CountSet();
-  stats.cast_ms = MsSince(start);
-  scan_prepared = true;
-}
-
 OccupancyMap::OccupancyMap(const OccupancyConfig& config) : impl_(std::make_unique<Impl>(config)) {}
 OccupancyMap::~OccupancyMap() = default;
 OccupancyMap::OccupancyMap(OccupancyMap&&) noexcept = default;
 OccupancyMap& OccupancyMap::operator=(OccupancyMap&&) noexcept = default;
+
+void OccupancyMap::Impl::Apply(occupancy_internal::ScanPreparer* prepared,
+                               const std::vector<occupancy_internal::KeyBox>* regions) {
+  stats = prepared->stats();
+  if (!prepared->ready()) return;
+  const Clock::time_point update_start = Clock::now();
+  if (regions != nullptr) prepared->KeepOnly(*regions);
+  tree.ApplyScan(prepared->free_space(), prepared->occupied());
+  stats.tree_update_ms = MsSince(update_start);
+  prepared->MarkApplied();
+}
 
 void OccupancyMap::Integrate(const ScanW& scan) {
   PrepareScan(scan);
@@ -264,18 +78,8 @@ void OccupancyMap::Integrate(const ScanW& scan) {
 }
 
 void OccupancyMap::PrepareScan(const ScanW& scan) {
-  Impl& m = *impl_;
-  m.stats = IntegrationStats{};
-  m.scan_prepared = false;
-  VoxelKey origin_key;
-  // Like OctoMap, an origin outside the key range casts no rays and marks nothing.
-  if (!AllFinite(scan.origin_W) || !PointToKey(scan.origin_W, m.config.resolution_m, &origin_key)) {
-    return;
-  }
-  const Clock::time_point start = Clock::now();
-  m.CollectRays(scan);
-  m.CastRays(scan.origin_W, origin_key);
-  m.FinishPreparedScan(start, m.ray_ends_W.size());
+  impl_->preparer.Prepare(scan);
+  impl_->stats = impl_->preparer.stats();
 }
 
 void OccupancyMap::Integrate(const DepthScanW& scan) {
@@ -284,32 +88,11 @@ void OccupancyMap::Integrate(const DepthScanW& scan) {
 }
 
 void OccupancyMap::PrepareScan(const DepthScanW& scan) {
-  if (!PointsLieOnPixelRays(scan)) {
-    PrepareScan(ToScanW(scan));
-    return;
-  }
-  Impl& m = *impl_;
-  m.stats = IntegrationStats{};
-  m.scan_prepared = false;
-  VoxelKey origin_key;
-  if (!PointToKey(scan.T_W_C.translation(), m.config.resolution_m, &origin_key)) return;
-  const Clock::time_point start = Clock::now();
-  m.CarveDepthScan(scan);
-  const occupancy_internal::CarvingStats carving = m.carver.Carve(&m.grid);
-  m.stats.projective = true;
-  m.stats.blocks_decided = carving.blocks_decided;
-  m.stats.voxels_tested = carving.voxels_tested;
-  m.FinishPreparedScan(start, m.carver.rays());
+  impl_->preparer.Prepare(scan);
+  impl_->stats = impl_->preparer.stats();
 }
 
-void OccupancyMap::ApplyPreparedScan() {
-  Impl& m = *impl_;
-  if (!m.scan_prepared) return;
-  m.scan_prepared = false;
-  const Clock::time_point update_start = Clock::now();
-  m.tree.ApplyScan(m.grid, m.occupied_keys);
-  m.stats.tree_update_ms = MsSince(update_start);
-}
+void OccupancyMap::ApplyPreparedScan() { impl_->Apply(&impl_->preparer, nullptr); }
 
 const IntegrationStats& OccupancyMap::last_stats() const { return impl_->stats; }
 

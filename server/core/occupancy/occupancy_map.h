@@ -4,6 +4,7 @@
 #include <Eigen/Geometry>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -59,6 +60,14 @@ struct DepthScanW {
   /// Row-major, 1 where the pixel belongs to an object (ScanW::object_points_W); empty: none.
   std::vector<std::uint8_t> object_mask;
 };
+
+/// The box, in the camera frame, that holds every voxel a scan's rays can update: the camera
+/// centre and the scan's points (a ray cut at max range ends between the two), grown by
+/// `margin_m` (a voxel diagonal or more, for the voxels they fall in). ReachInWorld() moves it by
+/// a pose: a world box holding those voxels for that pose.
+[[nodiscard]] Eigen::AlignedBox3d ReachInCameraFrame(const DepthScanW& scan, double margin_m);
+[[nodiscard]] Eigen::AlignedBox3d ReachInWorld(const Eigen::AlignedBox3d& reach_C,
+                                               const Eigen::Isometry3d& T_W_C);
 
 /// The points of `scan` in the world frame, split as its object mask says: the input with which
 /// the ray-by-ray integration gives what the projective one gives for `scan`.
@@ -137,6 +146,24 @@ class OccupancyMap {
   void Integrate(const DepthScanW& scan);
   void PrepareScan(const DepthScanW& scan);
   [[nodiscard]] const IntegrationStats& last_stats() const;
+
+  /// Integrates scans 0 .. count - 1 in order, the same map as Integrate() of each in turn, with
+  /// the rays of up to `threads` scans cast at once (`scan_at` is called on those threads, at
+  /// most once per index) while the OcTree takes them in order. last_stats(): the last scan's.
+  void IntegrateSequence(std::size_t count, const std::function<DepthScanW(std::size_t)>& scan_at,
+                         int threads);
+
+  /// Rebuilds the map inside `regions_W` only: every voxel there becomes unknown, then scans
+  /// 0 .. count - 1 are integrated in order, each only inside the regions (as
+  /// IntegrateSequence). Outside the regions nothing changes. When the regions hold every voxel
+  /// that some scans' rays reached before and reach now, and the sequence holds every scan
+  /// whose rays reach into the regions, the result is the map integrating all scans anew gives:
+  /// after a correction that moves a few keyframes, only the space they see is redone.
+  void RegenerateRegions(const std::vector<Eigen::AlignedBox3d>& regions_W, std::size_t count,
+                         const std::function<DepthScanW(std::size_t)>& scan_at, int threads);
+
+  /// A copy of the whole map (OcTree and configuration).
+  [[nodiscard]] OccupancyMap Clone() const;
 
   [[nodiscard]] VoxelState Query(const Eigen::Vector3d& point_W) const;
   [[nodiscard]] OccupancyCounts Counts() const;

@@ -1,0 +1,69 @@
+#pragma once
+// Internal to the occupancy module: turns one scan into the voxel updates it makes (free voxels
+// in a FreeSpaceGrid, occupied voxels as Morton codes) without touching an OcTree, so that
+// scans can be prepared on several threads and applied to the tree in order.
+
+#include <Eigen/Core>
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "occupancy/free_space_grid.h"
+#include "occupancy/occupancy_map.h"
+#include "occupancy/projective_carver.h"
+
+namespace objmap::occupancy_internal {
+
+/// Thread-safety: none; one preparer per thread.
+class ScanPreparer {
+ public:
+  explicit ScanPreparer(const OccupancyConfig& config)
+      : config_(config), grid_(config.resolution_m), carver_(config.resolution_m) {}
+
+  /// Casts the scan's rays ray by ray (OcTree::computeRayKeys semantics).
+  void Prepare(const ScanW& scan);
+  /// Carves the scan's free space from the depth image (ProjectiveCarver); ray by ray when its
+  /// points do not lie on their pixel rays.
+  void Prepare(const DepthScanW& scan);
+
+  /// A scan is prepared (and not yet applied).
+  [[nodiscard]] bool ready() const { return ready_; }
+  void MarkApplied() { ready_ = false; }
+  /// Drops the updates outside `regions` (for regenerating only part of a map).
+  void KeepOnly(const std::vector<KeyBox>& regions);
+  [[nodiscard]] const FreeSpaceGrid& free_space() const { return grid_; }
+  /// Morton codes, sorted and distinct; none of them is set in free_space().
+  [[nodiscard]] const std::vector<std::uint64_t>& occupied() const { return occupied_keys_; }
+  /// Stats of the last Prepare(); tree_update_ms is left to whoever applies it.
+  [[nodiscard]] const IntegrationStats& stats() const { return stats_; }
+
+ private:
+  /// What one point contributes: the end of its free-space ray, and its voxel when occupied.
+  struct PointRay {
+    bool carves = false;
+    Eigen::Vector3f free_end_W = Eigen::Vector3f::Zero();
+    bool marks_occupied = false;
+    VoxelKey occupied_key{};
+  };
+  [[nodiscard]] PointRay RayOf(const Eigen::Vector3f& origin, const Eigen::Vector3f& point_W,
+                               bool is_object) const;
+  void CollectRays(const ScanW& scan);
+  void KeepOneRayPerEndVoxel();
+  void CastRays(const Eigen::Vector3f& origin, const VoxelKey& origin_key);
+  void CarveDepthScan(const DepthScanW& scan);
+  void SortOccupied();
+  void Finish(std::chrono::steady_clock::time_point start, std::size_t rays);
+
+  OccupancyConfig config_;
+  FreeSpaceGrid grid_;
+  ProjectiveCarver carver_;
+  IntegrationStats stats_;
+  bool ready_ = false;
+  // Scratch, kept between scans to avoid reallocations.
+  std::vector<Eigen::Vector3f> ray_ends_W_;
+  std::vector<std::uint64_t> occupied_keys_;
+  VoxelKey min_key_{}, max_key_{};
+};
+
+}  // namespace objmap::occupancy_internal

@@ -1,0 +1,131 @@
+// OccupancyMap's integration of whole keyframe sequences: rays cast on several threads, the
+// OcTree updated in order; and the rebuild of chosen regions only.
+
+#include <algorithm>
+#include <cmath>
+#include <condition_variable>
+#include <limits>
+#include <mutex>
+#include <thread>
+
+#include "occupancy/occupancy_map.h"
+#include "occupancy/occupancy_map_impl.h"
+
+namespace objmap {
+namespace {
+
+using occupancy_internal::KeyBox;
+using occupancy_internal::ScanPreparer;
+using occupancy_internal::VoxelKey;
+
+// Keys of the voxels a world box touches, clipped to the key range; false when none.
+bool KeyBoxOf(const Eigen::AlignedBox3d& box_W, double resolution_m, KeyBox* keys) {
+  if (box_W.isEmpty() || !box_W.min().allFinite() || !box_W.max().allFinite()) return false;
+  constexpr double kFirst = 0.0, kLast = 65535.0;
+  for (int a = 0; a < 3; ++a) {
+    const double lo = std::floor(box_W.min()[a] / resolution_m) + 32768.0;
+    const double hi = std::floor(box_W.max()[a] / resolution_m) + 32768.0;
+    if (hi < kFirst || lo > kLast) return false;
+    keys->lo[static_cast<std::size_t>(a)] = static_cast<std::uint16_t>(std::max(lo, kFirst));
+    keys->hi[static_cast<std::size_t>(a)] = static_cast<std::uint16_t>(std::min(hi, kLast));
+  }
+  return true;
+}
+
+}  // namespace
+
+Eigen::AlignedBox3d ReachInCameraFrame(const DepthScanW& scan, double margin_m) {
+  Eigen::AlignedBox3d box(Eigen::Vector3d::Zero());  // the camera centre
+  for (const Eigen::Vector3f& p : scan.points_C) {
+    if (p.allFinite() && p.z() > 0.f) box.extend(p.cast<double>());
+  }
+  return Eigen::AlignedBox3d(box.min() - Eigen::Vector3d::Constant(margin_m),
+                             box.max() + Eigen::Vector3d::Constant(margin_m));
+}
+
+Eigen::AlignedBox3d ReachInWorld(const Eigen::AlignedBox3d& reach_C,
+                                 const Eigen::Isometry3d& T_W_C) {
+  Eigen::AlignedBox3d box_W;
+  for (int k = 0; k < 8; ++k) {
+    box_W.extend(T_W_C * reach_C.corner(static_cast<Eigen::AlignedBox3d::CornerType>(k)));
+  }
+  return box_W;
+}
+
+// Workers prepare scans w, w + threads, ... each into its own preparer and wait until this
+// thread has applied it; this thread applies them in order.
+void OccupancyMap::Impl::IntegrateInOrder(std::size_t count,
+                                          const std::function<DepthScanW(std::size_t)>& scan_at,
+                                          int threads, const std::vector<KeyBox>* regions) {
+  const auto workers = static_cast<std::size_t>(std::max(1, threads));
+  if (workers == 1 || count < 2) {
+    for (std::size_t i = 0; i < count; ++i) {
+      preparer.Prepare(scan_at(i));
+      Apply(&preparer, regions);
+    }
+    return;
+  }
+  constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
+  std::vector<std::unique_ptr<ScanPreparer>> slots;
+  for (std::size_t w = 0; w < workers; ++w) slots.push_back(std::make_unique<ScanPreparer>(config));
+  std::vector<std::size_t> ready_index(workers, kNone);  // scan waiting in each slot
+  std::mutex mutex;
+  std::condition_variable changed;
+  std::vector<std::thread> pool;
+  for (std::size_t w = 0; w < workers; ++w) {
+    pool.emplace_back([&, w] {
+      for (std::size_t i = w; i < count; i += workers) {
+        {
+          std::unique_lock<std::mutex> lock(mutex);
+          changed.wait(lock, [&] { return ready_index[w] == kNone; });
+        }
+        slots[w]->Prepare(scan_at(i));
+        std::lock_guard<std::mutex> lock(mutex);
+        ready_index[w] = i;
+        changed.notify_all();
+      }
+    });
+  }
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::size_t w = i % workers;
+    {
+      std::unique_lock<std::mutex> lock(mutex);
+      changed.wait(lock, [&] { return ready_index[w] == i; });
+    }
+    Apply(slots[w].get(), regions);
+    std::lock_guard<std::mutex> lock(mutex);
+    ready_index[w] = kNone;
+    changed.notify_all();
+  }
+  for (std::thread& worker : pool) worker.join();
+}
+
+void OccupancyMap::IntegrateSequence(std::size_t count,
+                                     const std::function<DepthScanW(std::size_t)>& scan_at,
+                                     int threads) {
+  impl_->IntegrateInOrder(count, scan_at, threads, nullptr);
+}
+
+void OccupancyMap::RegenerateRegions(const std::vector<Eigen::AlignedBox3d>& regions_W,
+                                     std::size_t count,
+                                     const std::function<DepthScanW(std::size_t)>& scan_at,
+                                     int threads) {
+  std::vector<KeyBox> regions;
+  for (const Eigen::AlignedBox3d& box : regions_W) {
+    KeyBox keys;
+    if (KeyBoxOf(box, impl_->config.resolution_m, &keys)) regions.push_back(keys);
+  }
+  if (regions.empty()) return;
+  impl_->tree.ClearRegions(regions);
+  impl_->IntegrateInOrder(count, scan_at, threads, &regions);
+}
+
+OccupancyMap OccupancyMap::Clone() const {
+  OccupancyMap copy(impl_->config);
+  // OcTree's copy constructor copies every node; the sensor model is the configuration's.
+  occupancy_internal::BatchOcTree nodes(impl_->tree);
+  copy.impl_->tree.swapContent(nodes);
+  return copy;
+}
+
+}  // namespace objmap
