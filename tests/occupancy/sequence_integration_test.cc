@@ -1,5 +1,6 @@
-// IntegrateSequence (rays cast on several threads) and RegenerateRegions (rebuilding only where
-// moved keyframes see) against integrating every scan in order: the same log-odds in every voxel.
+// IntegrateSequence (rays cast on several threads) and RegenerateWhereReached (rebuilding only
+// where moved keyframes see) against integrating every scan in order: the same log-odds in every
+// voxel.
 
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
@@ -89,87 +90,73 @@ TEST(SequenceIntegration, TwoThreadsGiveTheMapOfOneScanAfterTheOther) {
   EXPECT_GT(known, 300000u);
 }
 
-// Keyframes 5 and 6 get corrected poses; the regions are where their rays reach before and
-// after, and the sequence holds every keyframe reaching into them.
-TEST(SequenceIntegration, RegeneratingWhereMovedKeyframesSeeEqualsRebuildingAll) {
+// Keyframes 5 and 6 get corrected poses: the map is rebuilt where they reach, before and after,
+// from the keyframes whose reach boxes meet theirs.
+TEST(SequenceIntegration, RegeneratingWhereMovedKeyframesReachEqualsRebuildingAll) {
   std::vector<DepthScanW> scans = Walk();
   OccupancyConfig config;
   OccupancyMap map(config);
   map.IntegrateSequence(
       scans.size(), [&scans](std::size_t i) { return scans[i]; }, 2);
-  const double margin_m = 2.0 * config.resolution_m;
-  std::vector<Eigen::AlignedBox3d> reach_C;
-  for (const DepthScanW& scan : scans) reach_C.push_back(ReachInCameraFrame(scan, margin_m));
-  std::vector<Eigen::AlignedBox3d> regions;
+  std::vector<DepthScanW> changed;
   for (std::size_t moved : {std::size_t{5}, std::size_t{6}}) {
-    regions.push_back(ReachInWorld(reach_C[moved], scans[moved].T_W_C.cast<double>()));
+    changed.push_back(scans[moved]);
     Eigen::Isometry3f correction = Eigen::Isometry3f::Identity();
     correction.translation() = Eigen::Vector3f(0.031f, -0.017f, 0.008f);
     correction.linear() = Eigen::AngleAxisf(0.02f, Eigen::Vector3f::UnitZ()).toRotationMatrix();
     scans[moved].T_W_C = correction * scans[moved].T_W_C;
-    regions.push_back(ReachInWorld(reach_C[moved], scans[moved].T_W_C.cast<double>()));
-  }
-  std::vector<std::size_t> reaching;
-  for (std::size_t i = 0; i < scans.size(); ++i) {
-    const Eigen::AlignedBox3d reach = ReachInWorld(reach_C[i], scans[i].T_W_C.cast<double>());
-    for (const Eigen::AlignedBox3d& region : regions) {
-      if (reach.intersects(region)) {
-        reaching.push_back(i);
-        break;
-      }
-    }
+    changed.push_back(scans[moved]);
   }
   OccupancyMap rebuilt(config);
   rebuilt.IntegrateSequence(
       scans.size(), [&scans](std::size_t i) { return scans[i]; }, 1);
   OccupancyMap before = map.Clone();
-  map.RegenerateRegions(
-      regions, reaching.size(), [&](std::size_t i) { return scans[reaching[i]]; }, 2);
+  const std::size_t rebuilt_voxels = map.RegenerateWhereReached(
+      changed, scans.size(), [&](std::size_t i) { return scans[i]; }, 2);
   std::size_t known = 0;
   EXPECT_EQ(CountDifferences(map, rebuilt, &known), 0u);
   EXPECT_GT(known, 300000u);
+  EXPECT_GT(rebuilt_voxels, 10000u);
   // The correction changed the map (the comparison above is not between two unchanged maps).
   EXPECT_GT(CountDifferences(before, rebuilt, &known), 1000u);
 }
 
-TEST(SequenceIntegration, RegeneratingARegionLeavesTheRestAlone) {
+// The space one scan reaches, rebuilt from no scans at all, becomes unknown; the rest of the
+// map keeps every value.
+TEST(SequenceIntegration, RegeneratingLeavesTheSpaceOutsideAlone) {
   const std::vector<DepthScanW> scans = Walk();
   OccupancyConfig config;
-  OccupancyMap map(config);
+  OccupancyMap map(config), first_only(config);
   map.IntegrateSequence(
       scans.size(), [&scans](std::size_t i) { return scans[i]; }, 1);
+  first_only.Integrate(scans[0]);
   const OccupancyMap before = map.Clone();
-  // A box of 40 cm by the table, rebuilt from no scans at all: it becomes unknown, nothing else
-  // changes.
-  const Eigen::AlignedBox3d box(Eigen::Vector3d(0.6, -0.2, -0.3), Eigen::Vector3d(1.0, 0.2, 0.1));
-  map.RegenerateRegions(
-      {box}, 0, [&scans](std::size_t i) { return scans[i]; }, 1);
-  std::size_t changed = 0, unchanged = 0, known_after_in_box = 0;
+  const std::size_t cleared = map.RegenerateWhereReached(
+      {scans[7]}, 0, [&scans](std::size_t i) { return scans[i]; }, 1);
+  EXPECT_GT(cleared, 100000u);
   const auto after_values = LeafValues(map), before_values = LeafValues(before);
-  std::size_t j = 0;
-  const double res = config.resolution_m;
-  // The voxels the closed box touches.
-  auto touched = [&](std::uint64_t key, int axis) {
-    return static_cast<double>(key) >= std::floor(box.min()[axis] / res) + 32768.0 &&
-           static_cast<double>(key) <= std::floor(box.max()[axis] / res) + 32768.0;
-  };
-  for (const auto& [packed, value] : before_values) {
-    const bool in_box = touched((packed >> 32) & 0xFFFF, 0) &&
-                        touched((packed >> 16) & 0xFFFF, 1) && touched(packed & 0xFFFF, 2);
-    while (j < after_values.size() && after_values[j].first < packed) ++j;
-    const bool known_after = j < after_values.size() && after_values[j].first == packed;
-    if (in_box) {
-      known_after_in_box += known_after ? 1 : 0;
-    } else if (known_after && after_values[j].second == value) {
-      ++unchanged;
-    } else {
-      ++changed;
-    }
+  EXPECT_LT(after_values.size(), before_values.size());
+  // What stays known kept its value exactly.
+  std::size_t j = 0, kept = 0;
+  for (const auto& [packed, value] : after_values) {
+    while (j < before_values.size() && before_values[j].first < packed) ++j;
+    ASSERT_LT(j, before_values.size());
+    ASSERT_EQ(before_values[j].first, packed) << "no voxel becomes known";
+    EXPECT_EQ(before_values[j].second, value);
+    ++kept;
   }
-  EXPECT_EQ(known_after_in_box, 0u);
-  EXPECT_EQ(changed, 0u);
-  EXPECT_GT(unchanged, 100000u);
-  EXPECT_LT(after_values.size(), before_values.size());  // the box held known voxels
+  EXPECT_GT(kept, 100000u);
+  // Nothing that scan 7 can reach is left: every voxel it marks in a map of its own is unknown.
+  OccupancyMap seventh(config);
+  seventh.Integrate(scans[7]);
+  std::size_t reached_but_known = 0;
+  const auto seventh_values = LeafValues(seventh);
+  std::size_t k = 0;
+  for (const auto& [packed, value] : seventh_values) {
+    while (k < after_values.size() && after_values[k].first < packed) ++k;
+    if (k < after_values.size() && after_values[k].first == packed) ++reached_but_known;
+  }
+  EXPECT_EQ(reached_but_known, 0u);
 }
 
 TEST(SequenceIntegration, CloneIsADeepCopy) {

@@ -376,23 +376,28 @@ void Mapper::Impl::RegenerateOccupancy(const std::map<KeyframeId, Eigen::Isometr
     report->keyframes_reintegrated = static_cast<int>(keyframes.size());
     return;
   }
-  std::vector<Eigen::AlignedBox3d> regions;
+  // Each moved keyframe's scan as it was and as it is: the space it reached and reaches.
+  std::vector<DepthScanW> changed;
+  std::vector<Eigen::AlignedBox3d> changed_reach;
   for (const auto& [id, old_pose] : old_poses) {
-    regions.push_back(ReachInWorld(ReachOf(id), old_pose));
-    regions.push_back(ReachInWorld(ReachOf(id), keyframes.at(id).T_W_C));
+    const KeyframeRecord& record = keyframes.at(id);
+    changed.push_back(ToScan(record));
+    changed.push_back(changed.back());
+    changed.back().T_W_C = old_pose.cast<float>();
+    changed_reach.push_back(ReachInWorld(ReachOf(id), record.T_W_C));
+    changed_reach.push_back(ReachInWorld(ReachOf(id), old_pose));
   }
   std::vector<const KeyframeRecord*> reaching;
   for (const auto& [id, record] : keyframes) {
     const Eigen::AlignedBox3d reach = ReachInWorld(ReachOf(id), record.T_W_C);
-    if (std::any_of(regions.begin(), regions.end(), [&reach](const Eigen::AlignedBox3d& region) {
-          return reach.intersects(region);
-        })) {
+    if (std::any_of(changed_reach.begin(), changed_reach.end(),
+                    [&reach](const Eigen::AlignedBox3d& box) { return reach.intersects(box); })) {
       reaching.push_back(&record);
     }
   }
   auto updated = std::make_unique<OccupancyMap>(occupancy->Clone());
-  updated->RegenerateRegions(
-      regions, reaching.size(), [&reaching](std::size_t i) { return ToScan(*reaching[i]); },
+  updated->RegenerateWhereReached(
+      changed, reaching.size(), [&reaching](std::size_t i) { return ToScan(*reaching[i]); },
       config.regeneration.threads);
   report->occupancy_incremental = true;
   report->keyframes_reintegrated = static_cast<int>(reaching.size());

@@ -3,17 +3,6 @@
 namespace objmap::occupancy_internal {
 namespace {
 
-enum class RegionOverlap { kOutside, kPartly, kInside };
-
-RegionOverlap OverlapOf(const std::vector<KeyBox>& regions, const VoxelKey& base, int size) {
-  bool touched = false;
-  for (const KeyBox& box : regions) {
-    if (box.Contains(base, size)) return RegionOverlap::kInside;
-    touched |= box.Touches(base, size);
-  }
-  return touched ? RegionOverlap::kPartly : RegionOverlap::kOutside;
-}
-
 VoxelKey ChildBase(const VoxelKey& base, unsigned int child, int half) {
   return {static_cast<std::uint16_t>(base[0] + ((child & 1) ? half : 0)),
           static_cast<std::uint16_t>(base[1] + ((child & 2) ? half : 0)),
@@ -74,18 +63,18 @@ void BatchOcTree::Visit(octomap::OcTreeNode* node, int depth, const VoxelKey& ba
   if (!pruneNode(node)) node->updateOccupancyChildren();
 }
 
-void BatchOcTree::ClearRegions(const std::vector<KeyBox>& regions) {
-  if (root == nullptr || regions.empty()) return;
-  if (ClearVisit(root, 0, {0, 0, 0}, regions)) clear();
+void BatchOcTree::ClearRegion(const FreeSpaceGrid& region) {
+  if (root == nullptr) return;
+  if (ClearVisit(root, 0, {0, 0, 0}, region)) clear();
   size_changed = true;
 }
 
 bool BatchOcTree::ClearVisit(octomap::OcTreeNode* node, int depth, const VoxelKey& base,
-                             const std::vector<KeyBox>& regions) {
+                             const FreeSpaceGrid& region) {
   const int size = 1 << (kTreeDepth - depth);
-  const RegionOverlap overlap = OverlapOf(regions, base, size);
-  if (overlap == RegionOverlap::kOutside) return false;
-  if (overlap == RegionOverlap::kInside) {
+  const BlockState overlap = region.State(depth, base);
+  if (overlap == BlockState::kEmpty) return false;
+  if (overlap == BlockState::kFull) {
     if (nodeHasChildren(node)) CollapseToLeaf(node);
     return true;
   }
@@ -94,7 +83,7 @@ bool BatchOcTree::ClearVisit(octomap::OcTreeNode* node, int depth, const VoxelKe
   const int half = size / 2;
   for (unsigned int c = 0; c < 8; ++c) {
     if (!nodeChildExists(node, c)) continue;
-    if (ClearVisit(getNodeChild(node, c), depth + 1, ChildBase(base, c, half), regions)) {
+    if (ClearVisit(getNodeChild(node, c), depth + 1, ChildBase(base, c, half), region)) {
       deleteNodeChild(node, c);
     }
   }

@@ -26,9 +26,10 @@ class BatchOcTree : public octomap::OcTree {
   /// as non-lazy updateNode() does.
   void ApplyScan(const FreeSpaceGrid& free_space, const std::vector<std::uint64_t>& occupied);
 
-  /// Deletes every voxel inside the regions (they become unknown); nodes outside keep their
-  /// values, and inner nodes on the way get their occupancy refreshed.
-  void ClearRegions(const std::vector<KeyBox>& regions);
+  /// Deletes every voxel set in `region` (they become unknown); nodes outside keep their
+  /// values, and inner nodes on the way get their occupancy refreshed. `region`'s pyramid must
+  /// be built.
+  void ClearRegion(const FreeSpaceGrid& region);
 
  private:
   using CodeIterator = std::vector<std::uint64_t>::const_iterator;
@@ -37,7 +38,7 @@ class BatchOcTree : public octomap::OcTree {
              CodeIterator occupied_end);
   // True when `node` must go (all of it lies in the regions); it is then a leaf.
   bool ClearVisit(octomap::OcTreeNode* node, int depth, const VoxelKey& base,
-                  const std::vector<KeyBox>& regions);
+                  const FreeSpaceGrid& region);
   // Turns `node` into a leaf, its subtree pruned away, so that it can be deleted.
   void CollapseToLeaf(octomap::OcTreeNode* node);
 };

@@ -183,7 +183,14 @@ void FreeSpaceGrid::MarkVoxels(const VoxelKey& base, int size, std::uint64_t vox
   }
 }
 
-void FreeSpaceGrid::KeepOnly(const std::vector<KeyBox>& regions) {
+const FreeSpaceGrid::Brick* FreeSpaceGrid::BrickAt(const VoxelKey& key) const {
+  const std::int64_t cell = BrickCell(key);
+  if (cell < 0) return nullptr;
+  const std::int32_t index = cell_to_brick_[static_cast<std::size_t>(cell)];
+  return index < 0 ? nullptr : &bricks_[static_cast<std::size_t>(index)];
+}
+
+void FreeSpaceGrid::KeepOnly(const FreeSpaceGrid& region) {
   for (int z = 0; z < dims_[2]; ++z) {
     for (int y = 0; y < dims_[1]; ++y) {
       for (int x = 0; x < dims_[0]; ++x) {
@@ -193,23 +200,9 @@ void FreeSpaceGrid::KeepOnly(const std::vector<KeyBox>& regions) {
         const VoxelKey corner = {static_cast<std::uint16_t>((lo_[0] + x) << kBrickShift),
                                  static_cast<std::uint16_t>((lo_[1] + y) << kBrickShift),
                                  static_cast<std::uint16_t>((lo_[2] + z) << kBrickShift)};
-        // The brick's voxels inside the union of the boxes, slice by slice.
-        Brick keep{};
-        for (const KeyBox& box : regions) {
-          if (!box.Touches(corner, 8)) continue;
-          int from[3], to[3];
-          for (int a = 0; a < 3; ++a) {
-            from[a] = std::max(0, box.lo[a] - corner[a]);
-            to[a] = std::min(7, box.hi[a] - corner[a]);
-          }
-          std::uint64_t slice = 0;
-          for (int j = from[1]; j <= to[1]; ++j) {
-            for (int i = from[0]; i <= to[0]; ++i) slice |= std::uint64_t{1} << (i + 8 * j);
-          }
-          for (int k = from[2]; k <= to[2]; ++k) keep[static_cast<std::size_t>(k)] |= slice;
-        }
+        const Brick* keep = region.BrickAt(corner);
         Brick& brick = bricks_[static_cast<std::size_t>(index)];
-        for (std::size_t k = 0; k < 8; ++k) brick[k] &= keep[k];
+        for (std::size_t k = 0; k < 8; ++k) brick[k] &= keep == nullptr ? 0 : (*keep)[k];
       }
     }
   }

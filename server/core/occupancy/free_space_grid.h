@@ -17,24 +17,6 @@ inline constexpr int kKeyOffset = 32768;
 
 using VoxelKey = std::array<std::uint16_t, 3>;
 
-/// A box of voxels, bounds inclusive.
-struct KeyBox {
-  VoxelKey lo{}, hi{};
-  /// Whether the cube of `size` voxels at `base` lies wholly inside / touches the box.
-  [[nodiscard]] bool Contains(const VoxelKey& base, int size) const {
-    for (int a = 0; a < 3; ++a) {
-      if (base[a] < lo[a] || base[a] + size - 1 > hi[a]) return false;
-    }
-    return true;
-  }
-  [[nodiscard]] bool Touches(const VoxelKey& base, int size) const {
-    for (int a = 0; a < 3; ++a) {
-      if (base[a] + size - 1 < lo[a] || base[a] > hi[a]) return false;
-    }
-    return true;
-  }
-};
-
 /// Same discretization as OcTree::coordToKeyChecked; false outside the key range.
 [[nodiscard]] bool PointToKey(const Eigen::Vector3f& point, double resolution_m, VoxelKey* key);
 
@@ -96,8 +78,9 @@ class FreeSpaceGrid {
   void MarkVoxels(const VoxelKey& base, int size, std::uint64_t voxels);
 
   void Clear(const VoxelKey& key);
-  /// Clears every voxel outside the boxes; call BuildPyramid() after.
-  void KeepOnly(const std::vector<KeyBox>& regions);
+  /// Clears every voxel not set in `region` (another grid, of any box); call BuildPyramid()
+  /// after.
+  void KeepOnly(const FreeSpaceGrid& region);
   [[nodiscard]] bool Test(const VoxelKey& key) const;
 
   /// Builds the per-depth summaries; call after the last AddRay/Clear.
@@ -119,6 +102,7 @@ class FreeSpaceGrid {
   };
 
   [[nodiscard]] std::int64_t BrickCell(const VoxelKey& key) const;
+  [[nodiscard]] const Brick* BrickAt(const VoxelKey& key) const;
   void Traverse(const DdaRay& ray);
   std::int32_t NewBrick(std::int64_t cell);
   [[nodiscard]] BlockState SubBrickState(int depth, const VoxelKey& key) const;

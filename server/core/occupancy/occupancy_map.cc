@@ -61,12 +61,10 @@ OccupancyMap::~OccupancyMap() = default;
 OccupancyMap::OccupancyMap(OccupancyMap&&) noexcept = default;
 OccupancyMap& OccupancyMap::operator=(OccupancyMap&&) noexcept = default;
 
-void OccupancyMap::Impl::Apply(occupancy_internal::ScanPreparer* prepared,
-                               const std::vector<occupancy_internal::KeyBox>* regions) {
+void OccupancyMap::Impl::Apply(occupancy_internal::ScanPreparer* prepared) {
   stats = prepared->stats();
   if (!prepared->ready()) return;
   const Clock::time_point update_start = Clock::now();
-  if (regions != nullptr) prepared->KeepOnly(*regions);
   tree.ApplyScan(prepared->free_space(), prepared->occupied());
   stats.tree_update_ms = MsSince(update_start);
   prepared->MarkApplied();
@@ -92,7 +90,7 @@ void OccupancyMap::PrepareScan(const DepthScanW& scan) {
   impl_->stats = impl_->preparer.stats();
 }
 
-void OccupancyMap::ApplyPreparedScan() { impl_->Apply(&impl_->preparer, nullptr); }
+void OccupancyMap::ApplyPreparedScan() { impl_->Apply(&impl_->preparer); }
 
 const IntegrationStats& OccupancyMap::last_stats() const { return impl_->stats; }
 

@@ -153,14 +153,16 @@ class OccupancyMap {
   void IntegrateSequence(std::size_t count, const std::function<DepthScanW(std::size_t)>& scan_at,
                          int threads);
 
-  /// Rebuilds the map inside `regions_W` only: every voxel there becomes unknown, then scans
-  /// 0 .. count - 1 are integrated in order, each only inside the regions (as
-  /// IntegrateSequence). Outside the regions nothing changes. When the regions hold every voxel
-  /// that some scans' rays reached before and reach now, and the sequence holds every scan
-  /// whose rays reach into the regions, the result is the map integrating all scans anew gives:
-  /// after a correction that moves a few keyframes, only the space they see is redone.
-  void RegenerateRegions(const std::vector<Eigen::AlignedBox3d>& regions_W, std::size_t count,
-                         const std::function<DepthScanW(std::size_t)>& scan_at, int threads);
+  /// Rebuilds the map where the rays of the `changed` scans reach (give each moved keyframe's
+  /// scan twice, with its old and its new pose), in blocks of 16 voxels: every voxel there
+  /// becomes unknown, then scans 0 .. count - 1 are integrated in order, each only there (as
+  /// IntegrateSequence). Nothing changes elsewhere. When the sequence holds every scan whose
+  /// rays reach into that space, the result is the map integrating all scans anew gives: after a
+  /// correction that moves a few keyframes, only the space they see is redone, and the other
+  /// keyframes only there. Returns the voxels rebuilt (the region's size).
+  std::size_t RegenerateWhereReached(const std::vector<DepthScanW>& changed, std::size_t count,
+                                     const std::function<DepthScanW(std::size_t)>& scan_at,
+                                     int threads);
 
   /// A copy of the whole map (OcTree and configuration).
   [[nodiscard]] OccupancyMap Clone() const;

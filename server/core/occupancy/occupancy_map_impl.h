@@ -21,14 +21,13 @@ struct OccupancyMap::Impl {
     tree.setClampingThresMax(c.clamping_max);
   }
 
-  /// Writes a prepared scan into the tree (only inside `regions` when given) and records the
-  /// scan's stats.
-  void Apply(occupancy_internal::ScanPreparer* prepared,
-             const std::vector<occupancy_internal::KeyBox>* regions);
+  /// Writes a prepared scan into the tree and records the scan's stats.
+  void Apply(occupancy_internal::ScanPreparer* prepared);
 
-  /// Prepares and applies scans 0 .. count - 1 in order, rays cast on up to `threads` threads.
+  /// Prepares and applies scans 0 .. count - 1 in order, rays cast on up to `threads` threads;
+  /// with `region`, only the updates inside it.
   void IntegrateInOrder(std::size_t count, const std::function<DepthScanW(std::size_t)>& scan_at,
-                        int threads, const std::vector<occupancy_internal::KeyBox>* regions);
+                        int threads, const occupancy_internal::FreeSpaceGrid* region);
 
   OccupancyConfig config;
   occupancy_internal::BatchOcTree tree;

@@ -319,12 +319,8 @@ ProjectiveCarver::Footprint ProjectiveCarver::FootprintOf(float u_min, float u_m
   return footprint;
 }
 
-CarvingStats ProjectiveCarver::Carve(FreeSpaceGrid* grid) {
-  CarvingStats stats;
-  if (longest_range_ <= 0.f) return stats;
-  BuildHoleDistance();
-  BuildRangePyramid();
-  BuildWindowMax();
+template <typename Visit>
+void ProjectiveCarver::ForEachTopBlock(Visit visit) const {
   const int top = 1 << kTopBlockLog2;
   std::array<int, 3> first{}, last{};
   for (int a = 0; a < 3; ++a) {
@@ -334,13 +330,70 @@ CarvingStats ProjectiveCarver::Carve(FreeSpaceGrid* grid) {
   for (int z = first[2]; z <= last[2]; z += top) {
     for (int y = first[1]; y <= last[1]; y += top) {
       for (int x = first[0]; x <= last[0]; x += top) {
-        const VoxelKey base = {static_cast<std::uint16_t>(x), static_cast<std::uint16_t>(y),
-                               static_cast<std::uint16_t>(z)};
-        CarveBlock(base, kTopBlockLog2, grid, &stats);
+        visit(VoxelKey{static_cast<std::uint16_t>(x), static_cast<std::uint16_t>(y),
+                       static_cast<std::uint16_t>(z)});
       }
     }
   }
+}
+
+CarvingStats ProjectiveCarver::Carve(FreeSpaceGrid* grid, const FreeSpaceGrid* region) {
+  CarvingStats stats;
+  if (longest_range_ <= 0.f) return stats;
+  BuildHoleDistance();
+  BuildRangePyramid();
+  BuildWindowMax();
+  region_ = region;
+  ForEachTopBlock([&](const VoxelKey& base) { CarveBlock(base, kTopBlockLog2, grid, &stats); });
+  region_ = nullptr;
   return stats;
+}
+
+void ProjectiveCarver::MarkReachedBlocks(int block_log2, FreeSpaceGrid* region) {
+  if (longest_range_ <= 0.f) return;
+  BuildHoleDistance();
+  BuildRangePyramid();
+  ForEachTopBlock(
+      [&](const VoxelKey& base) { MarkReached(base, kTopBlockLog2, block_log2, region); });
+}
+
+void ProjectiveCarver::BlockDistances(const VoxelKey& base, int size_log2, Eigen::Vector3f* to_lo,
+                                      float* min_distance, float* max_distance) const {
+  const auto size_m = static_cast<float>((1 << size_log2) * resolution_m_);
+  *to_lo = (Eigen::Vector3d(KeyToLowerCoord(base[0], resolution_m_),
+                            KeyToLowerCoord(base[1], resolution_m_),
+                            KeyToLowerCoord(base[2], resolution_m_)) -
+            origin_W_)
+               .cast<float>();
+  const Eigen::Vector3f to_hi = *to_lo + Eigen::Vector3f::Constant(size_m);
+  *min_distance = to_lo->cwiseMax(-to_hi).cwiseMax(Eigen::Vector3f::Zero()).norm();
+  *max_distance = to_lo->cwiseAbs().cwiseMax(to_hi.cwiseAbs()).norm();
+}
+
+void ProjectiveCarver::MarkReached(const VoxelKey& base, int size_log2, int block_log2,
+                                   FreeSpaceGrid* region) {
+  const int size = 1 << size_log2;
+  for (int a = 0; a < 3; ++a) {
+    if (base[a] > max_key_[a] || base[a] + size - 1 < min_key_[a]) return;
+  }
+  Eigen::Vector3f to_lo;
+  float min_distance = 0.f, max_distance = 0.f;
+  BlockDistances(base, size_log2, &to_lo, &min_distance, &max_distance);
+  if (min_distance > longest_range_) return;
+  const Footprint footprint = Project(to_lo, static_cast<float>(size * resolution_m_));
+  if (footprint.kind == Footprint::kOutside) return;
+  if (BoundsOver(footprint.rect).max_range < min_distance) return;
+  if (size_log2 <= block_log2) {
+    region->MarkBlock(base, size_log2);
+    return;
+  }
+  const int half = size / 2;
+  for (int c = 0; c < 8; ++c) {
+    const VoxelKey child = {static_cast<std::uint16_t>(base[0] + ((c & 1) ? half : 0)),
+                            static_cast<std::uint16_t>(base[1] + ((c & 2) ? half : 0)),
+                            static_cast<std::uint16_t>(base[2] + ((c & 4) ? half : 0))};
+    MarkReached(child, size_log2 - 1, block_log2, region);
+  }
 }
 
 void ProjectiveCarver::CarveBlock(const VoxelKey& base, int size_log2, FreeSpaceGrid* grid,
@@ -350,15 +403,14 @@ void ProjectiveCarver::CarveBlock(const VoxelKey& base, int size_log2, FreeSpace
     // Rays only cross voxels between the camera and their ends, all inside the key box.
     if (base[a] > max_key_[a] || base[a] + size - 1 < min_key_[a]) return;
   }
+  if (region_ != nullptr && region_->State(kTreeDepth - size_log2, base) == BlockState::kEmpty) {
+    ++stats->blocks_decided;
+    return;
+  }
   const auto size_m = static_cast<float>(size * resolution_m_);
-  const Eigen::Vector3f to_lo = (Eigen::Vector3d(KeyToLowerCoord(base[0], resolution_m_),
-                                                 KeyToLowerCoord(base[1], resolution_m_),
-                                                 KeyToLowerCoord(base[2], resolution_m_)) -
-                                 origin_W_)
-                                    .cast<float>();
-  const Eigen::Vector3f to_hi = to_lo + Eigen::Vector3f::Constant(size_m);
-  const float min_distance =
-      to_lo.cwiseMax(-to_hi).cwiseMax(Eigen::Vector3f::Zero()).norm();  // 0 when inside
+  Eigen::Vector3f to_lo;
+  float min_distance = 0.f, max_distance = 0.f;
+  BlockDistances(base, size_log2, &to_lo, &min_distance, &max_distance);
   const Footprint footprint = min_distance > longest_range_ ? Footprint{} : Project(to_lo, size_m);
   if (footprint.kind == Footprint::kOutside) {
     ++stats->blocks_decided;
@@ -369,7 +421,6 @@ void ProjectiveCarver::CarveBlock(const VoxelKey& base, int size_log2, FreeSpace
     ++stats->blocks_decided;
     return;
   }
-  const float max_distance = to_lo.cwiseAbs().cwiseMax(to_hi.cwiseAbs()).norm();
   if (footprint.kind == Footprint::kInside && bounds.min_range > max_distance) {
     // Every ray in the rectangle passes the block whole and ends beyond it. Each voxel's
     // inscribed sphere projects to a disk of at least this radius, and the disk holds a pixel

@@ -41,8 +41,13 @@ class ProjectiveCarver {
   void SetRay(int pixel, const Eigen::Vector3f& free_end_W);
 
   /// Marks in `grid` (already Reset() to a box holding the camera centre and every free end)
-  /// the voxels the rays cross.
-  CarvingStats Carve(FreeSpaceGrid* grid);
+  /// the voxels the rays cross; with `region` (pyramid built), blocks outside it are skipped
+  /// (the voxels marked outside it are not all of those crossed there).
+  CarvingStats Carve(FreeSpaceGrid* grid, const FreeSpaceGrid* region = nullptr);
+
+  /// Marks in `region` every octree-aligned block of 2^block_log2 voxels that some ray reaches
+  /// (a superset of the voxels Carve() marks, at block granularity).
+  void MarkReachedBlocks(int block_log2, FreeSpaceGrid* region);
 
   /// The keys of the camera centre and of every free end so far, as a box.
   void KeyBox(VoxelKey* min_key, VoxelKey* max_key) const {
@@ -88,6 +93,14 @@ class ProjectiveCarver {
   [[nodiscard]] Footprint FootprintOf(float u_min, float u_max, float v_min, float v_max,
                                       bool all_in_front) const;
   void CarveBlock(const VoxelKey& base, int size_log2, FreeSpaceGrid* grid, CarvingStats* stats);
+  void MarkReached(const VoxelKey& base, int size_log2, int block_log2, FreeSpaceGrid* region);
+  // Calls visit(base) for each top-level block of the key box.
+  template <typename Visit>
+  void ForEachTopBlock(Visit visit) const;
+  // Distances from the camera centre to the nearest and farthest point of a block, and the
+  // block's corner relative to the centre.
+  void BlockDistances(const VoxelKey& base, int size_log2, Eigen::Vector3f* to_lo,
+                      float* min_distance, float* max_distance) const;
   void CarveVoxels(const VoxelKey& base, const Eigen::Vector3f& lo_rel_W, int size,
                    float block_max_range, FreeSpaceGrid* grid, CarvingStats* stats) const;
   void BuildWindowMax();
@@ -103,6 +116,7 @@ class ProjectiveCarver {
   VoxelKey min_key_{}, max_key_{};
   float longest_range_ = -1.f;
   std::size_t ray_count_ = 0;
+  const FreeSpaceGrid* region_ = nullptr;  // Carve()'s, while it runs
   PixelRays rays_;
   std::vector<std::uint8_t> hole_distance_;  // per pixel, 0 where there is a ray
   // levels_[l]: RangeBounds over tiles of 2^l x 2^l pixels (level 0: the pixels).

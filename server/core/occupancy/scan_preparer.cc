@@ -173,7 +173,12 @@ void ScanPreparer::CastRays(const Eigen::Vector3f& origin, const VoxelKey& origi
   for (const Eigen::Vector3f& end : ray_ends_W_) grid_.AddRay(origin, end);
 }
 
-void ScanPreparer::CarveDepthScan(const DepthScanW& scan) {
+bool ScanPreparer::CollectPixelRays(const DepthScanW& scan) {
+  VoxelKey origin_key;
+  if (!PointsLieOnPixelRays(scan) ||
+      !PointToKey(scan.T_W_C.translation(), config_.resolution_m, &origin_key)) {
+    return false;
+  }
   occupied_keys_.clear();
   PinholeCamera camera;
   camera.T_W_C = scan.T_W_C;
@@ -194,8 +199,7 @@ void ScanPreparer::CarveDepthScan(const DepthScanW& scan) {
     if (ray.carves) carver_.SetRay(static_cast<int>(i), ray.free_end_W);
   }
   SortOccupied();
-  carver_.KeyBox(&min_key_, &max_key_);
-  grid_.Reset(min_key_, max_key_);
+  return true;
 }
 
 void ScanPreparer::SortOccupied() {
@@ -218,36 +222,64 @@ void ScanPreparer::Prepare(const ScanW& scan) {
   Finish(start, ray_ends_W_.size());
 }
 
-void ScanPreparer::Prepare(const DepthScanW& scan) {
-  if (!PointsLieOnPixelRays(scan)) {
-    Prepare(ToScanW(scan));
-    return;
-  }
+void ScanPreparer::Prepare(const DepthScanW& scan, const FreeSpaceGrid* region) {
   stats_ = IntegrationStats{};
   ready_ = false;
-  VoxelKey origin_key;
-  if (!PointToKey(scan.T_W_C.translation(), config_.resolution_m, &origin_key)) return;
   const Clock::time_point start = Clock::now();
-  CarveDepthScan(scan);
-  const CarvingStats carving = carver_.Carve(&grid_);
+  if (!CollectPixelRays(scan)) {
+    Prepare(ToScanW(scan));
+    if (ready_ && region != nullptr) KeepOnly(*region);
+    return;
+  }
+  carver_.KeyBox(&min_key_, &max_key_);
+  grid_.Reset(min_key_, max_key_);
+  const CarvingStats carving = carver_.Carve(&grid_, region);
   stats_.projective = true;
   stats_.blocks_decided = carving.blocks_decided;
   stats_.voxels_tested = carving.voxels_tested;
+  if (region != nullptr) {
+    occupied_keys_.erase(std::remove_if(occupied_keys_.begin(), occupied_keys_.end(),
+                                        [region](std::uint64_t code) {
+                                          return !region->Test(KeyOfMortonCode(code));
+                                        }),
+                         occupied_keys_.end());
+    grid_.KeepOnly(*region);
+  }
   Finish(start, carver_.rays());
 }
 
-void ScanPreparer::KeepOnly(const std::vector<KeyBox>& regions) {
-  auto inside = [&regions](std::uint64_t code) {
-    const VoxelKey key = KeyOfMortonCode(code);
-    for (const KeyBox& box : regions) {
-      if (box.Contains(key, 1)) return true;
+void ScanPreparer::MarkReach(const DepthScanW& scan, int block_log2, FreeSpaceGrid* region) {
+  const int block = 1 << block_log2;
+  auto mark_occupied = [&] {
+    for (std::uint64_t code : occupied_keys_) {
+      VoxelKey key = KeyOfMortonCode(code);
+      for (std::uint16_t& k : key) k = static_cast<std::uint16_t>(k & ~(block - 1));
+      region->MarkBlock(key, block_log2);
     }
-    return false;
   };
-  occupied_keys_.erase(std::remove_if(occupied_keys_.begin(), occupied_keys_.end(),
-                                      [&inside](std::uint64_t code) { return !inside(code); }),
-                       occupied_keys_.end());
-  grid_.KeepOnly(regions);
+  if (CollectPixelRays(scan)) {
+    carver_.MarkReachedBlocks(block_log2, region);
+    mark_occupied();
+    return;
+  }
+  // Points off their pixel rays: the rays themselves, voxel by voxel.
+  const ScanW points = ToScanW(scan);
+  VoxelKey origin_key;
+  if (!AllFinite(points.origin_W) ||
+      !PointToKey(points.origin_W, config_.resolution_m, &origin_key)) {
+    return;
+  }
+  CollectRays(points);
+  for (const Eigen::Vector3f& end : ray_ends_W_) region->AddRay(points.origin_W, end);
+  mark_occupied();
+}
+
+void ScanPreparer::KeepOnly(const FreeSpaceGrid& region) {
+  occupied_keys_.erase(
+      std::remove_if(occupied_keys_.begin(), occupied_keys_.end(),
+                     [&region](std::uint64_t code) { return !region.Test(KeyOfMortonCode(code)); }),
+      occupied_keys_.end());
+  grid_.KeepOnly(region);
   grid_.BuildPyramid();
 }
 

@@ -24,14 +24,19 @@ class ScanPreparer {
   /// Casts the scan's rays ray by ray (OcTree::computeRayKeys semantics).
   void Prepare(const ScanW& scan);
   /// Carves the scan's free space from the depth image (ProjectiveCarver); ray by ray when its
-  /// points do not lie on their pixel rays.
-  void Prepare(const DepthScanW& scan);
+  /// points do not lie on their pixel rays. With `region`, only the updates inside it are kept
+  /// (and little work is spent outside it).
+  void Prepare(const DepthScanW& scan, const FreeSpaceGrid* region = nullptr);
+
+  /// Marks in `region` (Reset() to a box holding the scan's camera centre and points) the
+  /// octree-aligned blocks of 2^block_log2 voxels the scan can update.
+  void MarkReach(const DepthScanW& scan, int block_log2, FreeSpaceGrid* region);
 
   /// A scan is prepared (and not yet applied).
   [[nodiscard]] bool ready() const { return ready_; }
   void MarkApplied() { ready_ = false; }
-  /// Drops the updates outside `regions` (for regenerating only part of a map).
-  void KeepOnly(const std::vector<KeyBox>& regions);
+  /// Drops the updates outside `region` (for regenerating only part of a map).
+  void KeepOnly(const FreeSpaceGrid& region);
   [[nodiscard]] const FreeSpaceGrid& free_space() const { return grid_; }
   /// Morton codes, sorted and distinct; none of them is set in free_space().
   [[nodiscard]] const std::vector<std::uint64_t>& occupied() const { return occupied_keys_; }
@@ -51,7 +56,9 @@ class ScanPreparer {
   void CollectRays(const ScanW& scan);
   void KeepOneRayPerEndVoxel();
   void CastRays(const Eigen::Vector3f& origin, const VoxelKey& origin_key);
-  void CarveDepthScan(const DepthScanW& scan);
+  // Computes the pixels' rays and the occupied voxels; false when the projective path does not
+  // apply (points off their pixel rays, or a camera outside the key range).
+  bool CollectPixelRays(const DepthScanW& scan);
   void SortOccupied();
   void Finish(std::chrono::steady_clock::time_point start, std::size_t rays);
 

@@ -14,20 +14,24 @@
 namespace objmap {
 namespace {
 
-using occupancy_internal::KeyBox;
+using occupancy_internal::FreeSpaceGrid;
 using occupancy_internal::ScanPreparer;
 using occupancy_internal::VoxelKey;
 
+// The space a keyframe's correction can change is kept in blocks of 16 voxels: coarse enough to
+// be marked quickly from the image, fine enough to leave most of a room alone.
+constexpr int kRegionBlockLog2 = 4;
+
 // Keys of the voxels a world box touches, clipped to the key range; false when none.
-bool KeyBoxOf(const Eigen::AlignedBox3d& box_W, double resolution_m, KeyBox* keys) {
+bool KeysOf(const Eigen::AlignedBox3d& box_W, double resolution_m, VoxelKey* lo, VoxelKey* hi) {
   if (box_W.isEmpty() || !box_W.min().allFinite() || !box_W.max().allFinite()) return false;
   constexpr double kFirst = 0.0, kLast = 65535.0;
   for (int a = 0; a < 3; ++a) {
-    const double lo = std::floor(box_W.min()[a] / resolution_m) + 32768.0;
-    const double hi = std::floor(box_W.max()[a] / resolution_m) + 32768.0;
-    if (hi < kFirst || lo > kLast) return false;
-    keys->lo[static_cast<std::size_t>(a)] = static_cast<std::uint16_t>(std::max(lo, kFirst));
-    keys->hi[static_cast<std::size_t>(a)] = static_cast<std::uint16_t>(std::min(hi, kLast));
+    const double first = std::floor(box_W.min()[a] / resolution_m) + 32768.0;
+    const double last = std::floor(box_W.max()[a] / resolution_m) + 32768.0;
+    if (last < kFirst || first > kLast) return false;
+    (*lo)[static_cast<std::size_t>(a)] = static_cast<std::uint16_t>(std::max(first, kFirst));
+    (*hi)[static_cast<std::size_t>(a)] = static_cast<std::uint16_t>(std::min(last, kLast));
   }
   return true;
 }
@@ -56,12 +60,12 @@ Eigen::AlignedBox3d ReachInWorld(const Eigen::AlignedBox3d& reach_C,
 // thread has applied it; this thread applies them in order.
 void OccupancyMap::Impl::IntegrateInOrder(std::size_t count,
                                           const std::function<DepthScanW(std::size_t)>& scan_at,
-                                          int threads, const std::vector<KeyBox>* regions) {
+                                          int threads, const FreeSpaceGrid* region) {
   const auto workers = static_cast<std::size_t>(std::max(1, threads));
   if (workers == 1 || count < 2) {
     for (std::size_t i = 0; i < count; ++i) {
-      preparer.Prepare(scan_at(i));
-      Apply(&preparer, regions);
+      preparer.Prepare(scan_at(i), region);
+      Apply(&preparer);
     }
     return;
   }
@@ -79,7 +83,7 @@ void OccupancyMap::Impl::IntegrateInOrder(std::size_t count,
           std::unique_lock<std::mutex> lock(mutex);
           changed.wait(lock, [&] { return ready_index[w] == kNone; });
         }
-        slots[w]->Prepare(scan_at(i));
+        slots[w]->Prepare(scan_at(i), region);
         std::lock_guard<std::mutex> lock(mutex);
         ready_index[w] = i;
         changed.notify_all();
@@ -92,7 +96,7 @@ void OccupancyMap::Impl::IntegrateInOrder(std::size_t count,
       std::unique_lock<std::mutex> lock(mutex);
       changed.wait(lock, [&] { return ready_index[w] == i; });
     }
-    Apply(slots[w].get(), regions);
+    Apply(slots[w].get());
     std::lock_guard<std::mutex> lock(mutex);
     ready_index[w] = kNone;
     changed.notify_all();
@@ -106,18 +110,25 @@ void OccupancyMap::IntegrateSequence(std::size_t count,
   impl_->IntegrateInOrder(count, scan_at, threads, nullptr);
 }
 
-void OccupancyMap::RegenerateRegions(const std::vector<Eigen::AlignedBox3d>& regions_W,
-                                     std::size_t count,
-                                     const std::function<DepthScanW(std::size_t)>& scan_at,
-                                     int threads) {
-  std::vector<KeyBox> regions;
-  for (const Eigen::AlignedBox3d& box : regions_W) {
-    KeyBox keys;
-    if (KeyBoxOf(box, impl_->config.resolution_m, &keys)) regions.push_back(keys);
+std::size_t OccupancyMap::RegenerateWhereReached(
+    const std::vector<DepthScanW>& changed, std::size_t count,
+    const std::function<DepthScanW(std::size_t)>& scan_at, int threads) {
+  const double resolution_m = impl_->config.resolution_m;
+  Eigen::AlignedBox3d bounds_W;
+  for (const DepthScanW& scan : changed) {
+    bounds_W.extend(
+        ReachInWorld(ReachInCameraFrame(scan, 2.0 * resolution_m), scan.T_W_C.cast<double>()));
   }
-  if (regions.empty()) return;
-  impl_->tree.ClearRegions(regions);
-  impl_->IntegrateInOrder(count, scan_at, threads, &regions);
+  VoxelKey lo{}, hi{};
+  if (!KeysOf(bounds_W, resolution_m, &lo, &hi)) return 0;
+  FreeSpaceGrid region(resolution_m);
+  region.Reset(lo, hi);
+  ScanPreparer marker(impl_->config);
+  for (const DepthScanW& scan : changed) marker.MarkReach(scan, kRegionBlockLog2, &region);
+  region.BuildPyramid();
+  impl_->tree.ClearRegion(region);
+  impl_->IntegrateInOrder(count, scan_at, threads, &region);
+  return region.CountSet();
 }
 
 OccupancyMap OccupancyMap::Clone() const {
