@@ -66,6 +66,7 @@ void VisitMapModel(MapperConfig* m, Visitor& v) {
   v("structure_margin_m", &o.structure_margin_m);
   v("structure_margin_per_m2", &o.structure_margin_per_m2);
   v("one_ray_per_end_voxel", &o.one_ray_per_end_voxel);
+  v("threads_per_scan", &o.threads_per_scan);
   InventoryConfig& i = m->inventory;
   v.Section("inventory");
   v("min_observations", &i.min_observations);

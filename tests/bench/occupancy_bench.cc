@@ -2,7 +2,7 @@
 // 7-Scenes redkitchen keyframes, plus voxel-by-voxel agreement of the two maps.
 //
 // Usage: occupancy_bench [data_dir] [keyframes=10] [stride=10] [stock_keyframes=2] [max_range_m=4]
-//                        [ray_by_ray_keyframes=all]
+//                        [ray_by_ray_keyframes=all] [threads_per_scan=1]
 
 #include <octomap/OcTree.h>
 
@@ -30,6 +30,7 @@ struct Args {
   int stock_keyframes = 2;
   double max_range_m = 4.0;
   int ray_by_ray_keyframes = 1 << 30;  ///< how many keyframes also go ray by ray (all by default)
+  int threads_per_scan = 1;            ///< one core by default, as the stock baseline
 };
 
 double MsSince(Clock::time_point start) {
@@ -88,6 +89,7 @@ Args ParseArgs(int argc, char** argv) {
   if (argc > 4) args.stock_keyframes = std::atoi(argv[4]);
   if (argc > 5) args.max_range_m = std::atof(argv[5]);
   if (argc > 6) args.ray_by_ray_keyframes = std::atoi(argv[6]);
+  if (argc > 7) args.threads_per_scan = std::atoi(argv[7]);
   return args;
 }
 
@@ -177,6 +179,8 @@ int main(int argc, char** argv) {
   // Stock carving, so that the map is comparable voxel for voxel with insertPointCloud.
   config.structure_margin_m = 0.0;
   config.structure_margin_per_m2 = 0.0;
+  config.threads_per_scan = args.threads_per_scan;
+  std::printf("projective carving on %d thread(s) per scan\n", config.threads_per_scan);
   Maps maps{objmap::OccupancyMap(config), objmap::OccupancyMap(config),
             octomap::OcTree(config.resolution_m)};
   Totals totals;

@@ -46,6 +46,8 @@ bool PointToKey(const Eigen::Vector3f& point, double resolution_m, VoxelKey* key
 }
 
 void FreeSpaceGrid::Reset(const VoxelKey& min_key, const VoxelKey& max_key) {
+  min_key_ = min_key;
+  max_key_ = max_key;
   for (int i = 0; i < 3; ++i) {
     lo_[i] = (min_key[i] >> kBrickShift) - 1;
     dims_[i] = (max_key[i] >> kBrickShift) + 1 - lo_[i] + 1;
@@ -180,6 +182,18 @@ void FreeSpaceGrid::MarkVoxels(const VoxelKey& base, int size, std::uint64_t vox
       slice |= row << (x0 + 8 * (y0 + j));
     }
     brick[static_cast<std::size_t>(z0 + k)] |= slice;
+  }
+}
+
+void FreeSpaceGrid::MergeFrom(const FreeSpaceGrid& other) {
+  for (std::size_t cell = 0; cell < other.cell_to_brick_.size(); ++cell) {
+    const std::int32_t from = other.cell_to_brick_[cell];
+    if (from < 0) continue;
+    std::int32_t to = cell_to_brick_[cell];
+    if (to < 0) to = NewBrick(static_cast<std::int64_t>(cell));
+    const Brick& source = other.bricks_[static_cast<std::size_t>(from)];
+    Brick& target = bricks_[static_cast<std::size_t>(to)];
+    for (std::size_t k = 0; k < 8; ++k) target[k] |= source[k];
   }
 }
 

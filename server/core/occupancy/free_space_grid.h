@@ -63,6 +63,10 @@ class FreeSpaceGrid {
 
   /// Empties the grid and sizes it for keys in [min_key, max_key] (padded by one brick).
   void Reset(const VoxelKey& min_key, const VoxelKey& max_key);
+  [[nodiscard]] const VoxelKey& min_key() const { return min_key_; }
+  [[nodiscard]] const VoxelKey& max_key() const { return max_key_; }
+  /// Sets every voxel set in `other` (Reset() to the same keys).
+  void MergeFrom(const FreeSpaceGrid& other);
 
   /// Marks the voxels the segment origin->end crosses, excluding the end voxel: the 3D-DDA of
   /// OcTree::computeRayKeys with the same float/double arithmetic, so the sets match exactly.
@@ -109,6 +113,7 @@ class FreeSpaceGrid {
   void BuildLevel(int level);
 
   double resolution_m_;
+  VoxelKey min_key_{}, max_key_{};
   std::array<int, 3> lo_ = {0, 0, 0};        // brick coordinates (key >> 3) of the first cell
   std::array<int, 3> dims_ = {0, 0, 0};      // cells per axis
   std::vector<std::int32_t> cell_to_brick_;  // -1 where no voxel is set

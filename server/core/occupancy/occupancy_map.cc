@@ -50,6 +50,9 @@ bool OccupancyConfig::IsValid(std::string* why) const {
     return fail("clamping_min/clamping_max must lie in (0, 1) with clamping_min < clamping_max");
   }
   if (object_margin_voxels < 0) return fail("object_margin_voxels must be >= 0");
+  if (threads_per_scan < 1 || threads_per_scan > 64) {
+    return fail("threads_per_scan must lie in [1, 64]");
+  }
   if (!(structure_margin_m >= 0.0) || !(structure_margin_per_m2 >= 0.0)) {
     return fail("structure_margin_m and structure_margin_per_m2 must be >= 0");
   }

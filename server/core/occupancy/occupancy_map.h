@@ -35,6 +35,9 @@ struct OccupancyConfig {
   /// Approximation for speed: cast one free-space ray per distinct end voxel (to the first point
   /// in it) instead of one per point. Off: the result equals stock insertPointCloud exactly.
   bool one_ray_per_end_voxel = false;
+  /// Threads that carve one depth scan's free space (its blocks are split between them; the map
+  /// is the same for any number). IntegrateSequence() on several threads carves each scan on one.
+  int threads_per_scan = 2;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <thread>
 
 namespace objmap::occupancy_internal {
 namespace {
@@ -337,15 +338,44 @@ void ProjectiveCarver::ForEachTopBlock(Visit visit) const {
   }
 }
 
-CarvingStats ProjectiveCarver::Carve(FreeSpaceGrid* grid, const FreeSpaceGrid* region) {
+CarvingStats ProjectiveCarver::Carve(FreeSpaceGrid* grid, const FreeSpaceGrid* region,
+                                     int threads) {
   CarvingStats stats;
   if (longest_range_ <= 0.f) return stats;
   BuildHoleDistance();
   BuildRangePyramid();
   BuildWindowMax();
-  region_ = region;
-  ForEachTopBlock([&](const VoxelKey& base) { CarveBlock(base, kTopBlockLog2, grid, &stats); });
-  region_ = nullptr;
+  std::vector<VoxelKey> top_blocks;
+  ForEachTopBlock([&top_blocks](const VoxelKey& base) { top_blocks.push_back(base); });
+  const auto workers =
+      static_cast<std::size_t>(std::clamp(threads, 1, static_cast<int>(top_blocks.size())));
+  if (workers <= 1) {
+    for (const VoxelKey& base : top_blocks) CarveBlock(base, kTopBlockLog2, region, grid, &stats);
+    return stats;
+  }
+  // Every worker but the first marks a grid of its own (a grid is not safe to share), merged
+  // into `grid` at the end; blocks are dealt out in turn so that the workers' loads match.
+  std::vector<FreeSpaceGrid> own_grids(workers - 1, FreeSpaceGrid(resolution_m_));
+  std::vector<CarvingStats> own_stats(workers);
+  std::vector<std::thread> pool;
+  for (std::size_t w = 0; w < workers; ++w) {
+    FreeSpaceGrid* marks = grid;
+    if (w > 0) {
+      marks = &own_grids[w - 1];
+      marks->Reset(grid->min_key(), grid->max_key());
+    }
+    pool.emplace_back([&, w, marks] {
+      for (std::size_t b = w; b < top_blocks.size(); b += workers) {
+        CarveBlock(top_blocks[b], kTopBlockLog2, region, marks, &own_stats[w]);
+      }
+    });
+  }
+  for (std::thread& worker : pool) worker.join();
+  for (const FreeSpaceGrid& marks : own_grids) grid->MergeFrom(marks);
+  for (const CarvingStats& part : own_stats) {
+    stats.blocks_decided += part.blocks_decided;
+    stats.voxels_tested += part.voxels_tested;
+  }
   return stats;
 }
 
@@ -396,14 +426,14 @@ void ProjectiveCarver::MarkReached(const VoxelKey& base, int size_log2, int bloc
   }
 }
 
-void ProjectiveCarver::CarveBlock(const VoxelKey& base, int size_log2, FreeSpaceGrid* grid,
-                                  CarvingStats* stats) {
+void ProjectiveCarver::CarveBlock(const VoxelKey& base, int size_log2, const FreeSpaceGrid* region,
+                                  FreeSpaceGrid* grid, CarvingStats* stats) const {
   const int size = 1 << size_log2;
   for (int a = 0; a < 3; ++a) {
     // Rays only cross voxels between the camera and their ends, all inside the key box.
     if (base[a] > max_key_[a] || base[a] + size - 1 < min_key_[a]) return;
   }
-  if (region_ != nullptr && region_->State(kTreeDepth - size_log2, base) == BlockState::kEmpty) {
+  if (region != nullptr && region->State(kTreeDepth - size_log2, base) == BlockState::kEmpty) {
     ++stats->blocks_decided;
     return;
   }
@@ -444,7 +474,7 @@ void ProjectiveCarver::CarveBlock(const VoxelKey& base, int size_log2, FreeSpace
     const VoxelKey child = {static_cast<std::uint16_t>(base[0] + ((c & 1) ? half : 0)),
                             static_cast<std::uint16_t>(base[1] + ((c & 2) ? half : 0)),
                             static_cast<std::uint16_t>(base[2] + ((c & 4) ? half : 0))};
-    CarveBlock(child, size_log2 - 1, grid, stats);
+    CarveBlock(child, size_log2 - 1, region, grid, stats);
   }
 }
 

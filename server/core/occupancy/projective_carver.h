@@ -43,7 +43,8 @@ class ProjectiveCarver {
   /// Marks in `grid` (already Reset() to a box holding the camera centre and every free end)
   /// the voxels the rays cross; with `region` (pyramid built), blocks outside it are skipped
   /// (the voxels marked outside it are not all of those crossed there).
-  CarvingStats Carve(FreeSpaceGrid* grid, const FreeSpaceGrid* region = nullptr);
+  /// `threads` > 1 splits the blocks between threads (the same voxels are marked).
+  CarvingStats Carve(FreeSpaceGrid* grid, const FreeSpaceGrid* region = nullptr, int threads = 1);
 
   /// Marks in `region` every octree-aligned block of 2^block_log2 voxels that some ray reaches
   /// (a superset of the voxels Carve() marks, at block granularity).
@@ -92,7 +93,8 @@ class ProjectiveCarver {
                                          const std::array<float, 8>& z) const;
   [[nodiscard]] Footprint FootprintOf(float u_min, float u_max, float v_min, float v_max,
                                       bool all_in_front) const;
-  void CarveBlock(const VoxelKey& base, int size_log2, FreeSpaceGrid* grid, CarvingStats* stats);
+  void CarveBlock(const VoxelKey& base, int size_log2, const FreeSpaceGrid* region,
+                  FreeSpaceGrid* grid, CarvingStats* stats) const;
   void MarkReached(const VoxelKey& base, int size_log2, int block_log2, FreeSpaceGrid* region);
   // Calls visit(base) for each top-level block of the key box.
   template <typename Visit>
@@ -116,7 +118,6 @@ class ProjectiveCarver {
   VoxelKey min_key_{}, max_key_{};
   float longest_range_ = -1.f;
   std::size_t ray_count_ = 0;
-  const FreeSpaceGrid* region_ = nullptr;  // Carve()'s, while it runs
   PixelRays rays_;
   std::vector<std::uint8_t> hole_distance_;  // per pixel, 0 where there is a ray
   // levels_[l]: RangeBounds over tiles of 2^l x 2^l pixels (level 0: the pixels).

@@ -233,7 +233,7 @@ void ScanPreparer::Prepare(const DepthScanW& scan, const FreeSpaceGrid* region) 
   }
   carver_.KeyBox(&min_key_, &max_key_);
   grid_.Reset(min_key_, max_key_);
-  const CarvingStats carving = carver_.Carve(&grid_, region);
+  const CarvingStats carving = carver_.Carve(&grid_, region, threads_);
   stats_.projective = true;
   stats_.blocks_decided = carving.blocks_decided;
   stats_.voxels_tested = carving.voxels_tested;

@@ -18,8 +18,12 @@ namespace objmap::occupancy_internal {
 /// Thread-safety: none; one preparer per thread.
 class ScanPreparer {
  public:
-  explicit ScanPreparer(const OccupancyConfig& config)
-      : config_(config), grid_(config.resolution_m), carver_(config.resolution_m) {}
+  /// `threads`: those that carve one scan (OccupancyConfig::threads_per_scan by default).
+  explicit ScanPreparer(const OccupancyConfig& config, int threads = 0)
+      : config_(config),
+        threads_(threads > 0 ? threads : config.threads_per_scan),
+        grid_(config.resolution_m),
+        carver_(config.resolution_m) {}
 
   /// Casts the scan's rays ray by ray (OcTree::computeRayKeys semantics).
   void Prepare(const ScanW& scan);
@@ -63,6 +67,7 @@ class ScanPreparer {
   void Finish(std::chrono::steady_clock::time_point start, std::size_t rays);
 
   OccupancyConfig config_;
+  int threads_;
   FreeSpaceGrid grid_;
   ProjectiveCarver carver_;
   IntegrationStats stats_;

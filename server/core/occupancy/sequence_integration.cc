@@ -71,7 +71,10 @@ void OccupancyMap::Impl::IntegrateInOrder(std::size_t count,
   }
   constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
   std::vector<std::unique_ptr<ScanPreparer>> slots;
-  for (std::size_t w = 0; w < workers; ++w) slots.push_back(std::make_unique<ScanPreparer>(config));
+  // The threads go to scans, one each.
+  for (std::size_t w = 0; w < workers; ++w) {
+    slots.push_back(std::make_unique<ScanPreparer>(config, /*threads=*/1));
+  }
   std::vector<std::size_t> ready_index(workers, kNone);  // scan waiting in each slot
   std::mutex mutex;
   std::condition_variable changed;
