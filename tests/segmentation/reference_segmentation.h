@@ -6,9 +6,28 @@
 #include <cmath>
 #include <vector>
 
+#include "segmentation/segmentation_internal.h"
 #include "segmentation/segmenter.h"
 
 namespace objmap::reference {
+
+// The steps of Segmenter and the whole of it as whole-image passes (reference_segmenter.cc);
+// same signatures as their namesakes in segmentation_internal.h.
+[[nodiscard]] std::vector<Eigen::Vector3f> ComputeNormals(const OrganizedCloud& cloud_C,
+                                                          int step_px, float jump_ratio);
+int DetectSupportingPlanes(const OrganizedCloud& cloud_C,
+                           const std::vector<Eigen::Vector3f>& normals,
+                           const SegmenterConfig& config, float focal_px,
+                           std::vector<std::int8_t>* plane_of_pixel);
+void BuildSupervoxels(const OrganizedCloud& cloud_C, const std::vector<Eigen::Vector3f>& normals,
+                      const std::vector<std::int8_t>& plane_of_pixel, const SegmenterConfig& config,
+                      float focal_px, std::vector<int>* supervoxel_of_pixel,
+                      std::vector<seg::Supervoxel>* supervoxels);
+[[nodiscard]] std::vector<seg::GraphEdge> BuildAdjacencyGraph(
+    const OrganizedCloud& cloud_C, const std::vector<int>& supervoxel_of_pixel,
+    const std::vector<seg::Supervoxel>& supervoxels, const SegmenterConfig& config);
+[[nodiscard]] SegmentationResult Segment(const OrganizedCloud& cloud_C,
+                                         const SegmenterConfig& config);
 
 // Detection to segment by whole-image passes per box (segmentation/detection_pixels.cc computes
 // the same from a SegmentIndex built once per frame).

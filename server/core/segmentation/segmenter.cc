@@ -3,6 +3,8 @@
 #include "segmentation/segmenter.h"
 
 #include <algorithm>
+#include <cstdint>
+#include <cstring>
 #include <numeric>
 
 #include "segmentation/segmentation_internal.h"
@@ -70,13 +72,34 @@ void DropSmallPlanePatches(const SegmenterConfig& config, std::vector<seg::Super
   }
 }
 
+// Stable sort by weight: ties keep the graph's (a, b) order, which the cut's result depends on.
+// Weights are >= 0, so their bit patterns order like the floats; each non-zero edge sorts as one
+// 64-bit key (weight bits, position). Edges inside one plane (weight 0, often half of them)
+// need no sorting at all.
+void SortByWeight(std::vector<seg::GraphEdge>* edges) {
+  std::vector<std::uint64_t> keys;
+  std::vector<seg::GraphEdge> sorted;
+  sorted.reserve(edges->size());
+  for (size_t k = 0; k < edges->size(); ++k) {
+    const float weight = (*edges)[k].weight;
+    if (weight == 0.f) {
+      sorted.push_back((*edges)[k]);
+      continue;
+    }
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &weight, sizeof(bits));
+    keys.push_back((static_cast<std::uint64_t>(bits) << 32) | k);
+  }
+  std::sort(keys.begin(), keys.end());
+  for (std::uint64_t key : keys) sorted.push_back((*edges)[key & 0xffffffffu]);
+  edges->swap(sorted);
+}
+
 // Kruskal over edges sorted by weight: merge when the edge is no heavier than both segments'
 // Int(C) + k / |C| (Felzenszwalb & Huttenlocher 2004), then absorb segments under the size floor.
 void CutGraph(std::vector<seg::GraphEdge>* edges, const SegmenterConfig& config,
               Components* components) {
-  std::stable_sort(
-      edges->begin(), edges->end(),
-      [](const seg::GraphEdge& x, const seg::GraphEdge& y) { return x.weight < y.weight; });
+  SortByWeight(edges);
   for (const seg::GraphEdge& e : *edges) {
     const int a = components->Find(e.a);
     const int b = components->Find(e.b);
@@ -106,6 +129,7 @@ SegmentationResult Relabel(const OrganizedCloud& cloud, const std::vector<int>& 
   result.height = cloud.height;
   result.labels.assign(cloud.size(), -1);
   std::vector<int> segment_of_root(supervoxels.size(), -1);
+  std::vector<int> segment_of_supervoxel(supervoxels.size(), -1);
   std::vector<int> plane_pixels;
   std::vector<int> all_pixels;
   for (size_t s = 0; s < supervoxels.size(); ++s) {
@@ -116,12 +140,13 @@ SegmentationResult Relabel(const OrganizedCloud& cloud, const std::vector<int>& 
       all_pixels.push_back(0);
     }
     const int id = segment_of_root[root];
+    segment_of_supervoxel[s] = id;
     all_pixels[id] += supervoxels[s].pixels;
     if (supervoxels[s].plane >= 0) plane_pixels[id] += supervoxels[s].pixels;
   }
   for (size_t i = 0; i < cloud.size(); ++i) {
     const int s = supervoxel_of_pixel[i];
-    if (s >= 0) result.labels[i] = segment_of_root[components->Find(s)];
+    if (s >= 0) result.labels[i] = segment_of_supervoxel[s];
   }
   result.segment_is_plane.resize(result.num_segments);
   for (int id = 0; id < result.num_segments; ++id) {

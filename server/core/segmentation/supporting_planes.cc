@@ -56,13 +56,18 @@ bool FindPlane(const OrganizedCloud& cloud, const std::vector<Eigen::Vector3f>& 
   std::uniform_int_distribution<size_t> pick(0, samples.size() - 1);
   size_t best_count = 0;
   const size_t stride = std::max<size_t>(1, samples.size() / kMaxScoredSamples);
+  // The scored samples side by side: every hypothesis reads all of them.
+  std::vector<Eigen::Vector3f> scored_points, scored_normals;
+  for (size_t k = 0; k < samples.size(); k += stride) {
+    scored_points.push_back(cloud.points_C[samples[k]]);
+    scored_normals.push_back(normals[samples[k]]);
+  }
   for (int it = 0; it < iterations; ++it) {
     const int seed = samples[pick(*rng)];
     Plane candidate{normals[seed], -normals[seed].dot(cloud.points_C[seed])};
     size_t count = 0;
-    for (size_t k = 0; k < samples.size(); k += stride) {
-      const int i = samples[k];
-      count += inlier(candidate, cloud.points_C[i], normals[i]) ? 1 : 0;
+    for (size_t k = 0; k < scored_points.size(); ++k) {
+      count += inlier(candidate, scored_points[k], scored_normals[k]) ? 1 : 0;
     }
     if (count > best_count) {
       best_count = count;
@@ -78,22 +83,32 @@ bool FindPlane(const OrganizedCloud& cloud, const std::vector<Eigen::Vector3f>& 
   return true;
 }
 
-// Labels every free inlier pixel with `id` when the plane's metric area is large enough.
-bool AssignPlane(const OrganizedCloud& cloud, const std::vector<Eigen::Vector3f>& normals,
-                 const Plane& plane, const InlierTest& inlier, float focal_px, float min_area_m2,
-                 int id, std::vector<std::int8_t>* plane_of_pixel) {
-  std::vector<int> members;
-  float area_m2 = 0.f;
+// Labels every pixel with the first of `planes` it is an inlier of; returns for each plane
+// whether its metric area reaches `min_area_m2`. This is what labelling the planes one after the
+// other, each taking the inliers still free, gives, in one pass over the image instead of one per
+// plane. The area is summed in pixel order and only until it reaches the minimum: the terms are
+// positive, so the full sum would reach it too.
+std::vector<bool> AssignPlanes(const OrganizedCloud& cloud,
+                               const std::vector<Eigen::Vector3f>& normals,
+                               const std::vector<Plane>& planes, const InlierTest& inlier,
+                               float focal_px, float min_area_m2,
+                               std::vector<std::int8_t>* plane_of_pixel) {
+  std::vector<float> area_m2(planes.size(), 0.f);
+  std::vector<bool> large(planes.size(), false);
   for (size_t i = 0; i < cloud.size(); ++i) {
-    if ((*plane_of_pixel)[i] >= 0 || !cloud.IsValid(static_cast<int>(i))) continue;
+    if (!cloud.IsValid(static_cast<int>(i)) || !normals[i].allFinite()) continue;
     const Eigen::Vector3f& p = cloud.points_C[i];
-    if (!normals[i].allFinite() || !inlier(plane, p, normals[i])) continue;
-    members.push_back(static_cast<int>(i));
-    area_m2 += PixelAreaM2(p, plane.normal, focal_px);
+    for (size_t k = 0; k < planes.size(); ++k) {
+      if (!inlier(planes[k], p, normals[i])) continue;
+      (*plane_of_pixel)[i] = static_cast<std::int8_t>(k);
+      if (!large[k]) {
+        area_m2[k] += PixelAreaM2(p, planes[k].normal, focal_px);
+        large[k] = !(area_m2[k] < min_area_m2);
+      }
+      break;
+    }
   }
-  if (area_m2 < min_area_m2) return false;
-  for (int i : members) (*plane_of_pixel)[i] = static_cast<std::int8_t>(id);
-  return true;
+  return large;
 }
 
 }  // namespace
@@ -114,20 +129,28 @@ int DetectSupportingPlanes(const OrganizedCloud& cloud_C,
                           std::cos(config.plane_normal_angle_deg * kPi / 180.f)};
 
   std::mt19937 rng(12345);  // fixed seed: the same cloud always gives the same planes
-  int found = 0;
-  while (found < config.max_planes && samples.size() >= 16) {
+  // Hypotheses first, each on the samples the previous ones leave free, then one labelling pass.
+  std::vector<Plane> planes;
+  while (static_cast<int>(planes.size()) < config.max_planes && samples.size() >= 16) {
     Plane plane;
     if (!FindPlane(cloud_C, normals, samples, inlier, config.plane_iterations, &rng, &plane)) break;
-    if (!AssignPlane(cloud_C, normals, plane, inlier, focal_px, config.min_plane_area_m2, found,
-                     plane_of_pixel)) {
-      break;  // hypotheses are tried largest first, so smaller ones would fail too
-    }
+    planes.push_back(plane);
     std::vector<int> rest;
     for (int i : samples) {
-      if ((*plane_of_pixel)[i] < 0) rest.push_back(i);
+      if (!inlier(plane, cloud_C.points_C[i], normals[i])) rest.push_back(i);
     }
     samples.swap(rest);
-    ++found;
+  }
+  const std::vector<bool> large = AssignPlanes(cloud_C, normals, planes, inlier, focal_px,
+                                               config.min_plane_area_m2, plane_of_pixel);
+  // Hypotheses come largest first: after the first plane too small to support anything, later
+  // ones would fail too, so they are dropped with it.
+  int found = 0;
+  while (found < static_cast<int>(planes.size()) && large[found]) ++found;
+  if (found < static_cast<int>(planes.size())) {
+    for (std::int8_t& plane : *plane_of_pixel) {
+      if (plane >= found) plane = -1;
+    }
   }
   return found;
 }

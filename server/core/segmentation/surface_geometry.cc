@@ -7,37 +7,42 @@
 namespace objmap::seg {
 namespace {
 
-// The neighbour `du, dv` away when it is valid and on the same surface, else null.
-const Eigen::Vector3f* ContinuousNeighbour(const OrganizedCloud& cloud, int u, int v, int du,
-                                           int dv, float jump_ratio, int step_px) {
-  const int u2 = u + du;
-  const int v2 = v + dv;
-  if (u2 < 0 || v2 < 0 || u2 >= cloud.width || v2 >= cloud.height) return nullptr;
-  const int i = v * cloud.width + u;
-  const int j = v2 * cloud.width + u2;
-  if (!cloud.IsValid(j)) return nullptr;
-  if (!DepthContinuous(cloud.points_C[i].z(), cloud.points_C[j].z(), jump_ratio, step_px)) {
-    return nullptr;
+// One row pass: every neighbour test works on the z values, which the cache already holds, and
+// the bounds are hoisted out of the pixel loop (this step runs on all 307,200 pixels).
+void RowNormals(const OrganizedCloud& cloud, int v, int s, float jump_ratio,
+                Eigen::Vector3f* normals_row) {
+  const int w = cloud.width;
+  const Eigen::Vector3f* row = &cloud.points_C[static_cast<size_t>(v) * w];
+  const Eigen::Vector3f* row_up = v - s >= 0 ? row - static_cast<size_t>(s) * w : nullptr;
+  const Eigen::Vector3f* row_down =
+      v + s < cloud.height ? row + static_cast<size_t>(s) * w : nullptr;
+  // A neighbour counts when it lies on the same surface; DepthContinuous is false for NaN depth,
+  // so it also rejects invalid neighbours.
+  auto continuous = [&](float z, const Eigen::Vector3f* q) {
+    return q != nullptr && DepthContinuous(z, q->z(), jump_ratio, s);
+  };
+  for (int u = 0; u < w; ++u) {
+    const Eigen::Vector3f& p = row[u];
+    const float z = p.z();
+    if (!std::isfinite(z)) continue;
+    const Eigen::Vector3f* right = u + s < w ? &row[u + s] : nullptr;
+    const Eigen::Vector3f* left = u - s >= 0 ? &row[u - s] : nullptr;
+    const Eigen::Vector3f* down = row_down ? &row_down[u] : nullptr;
+    const Eigen::Vector3f* up = row_up ? &row_up[u] : nullptr;
+    if (!continuous(z, right)) right = nullptr;
+    if (!continuous(z, left)) left = nullptr;
+    if (!continuous(z, down)) down = nullptr;
+    if (!continuous(z, up)) up = nullptr;
+    if ((right == nullptr && left == nullptr) || (down == nullptr && up == nullptr)) continue;
+    // Central differences where both sides exist, one-sided at borders and depth edges.
+    const Eigen::Vector3f dx = (right ? *right : p) - (left ? *left : p);
+    const Eigen::Vector3f dy = (down ? *down : p) - (up ? *up : p);
+    Eigen::Vector3f n = dx.cross(dy);
+    const float norm = n.norm();
+    if (!(norm > 0.f)) continue;
+    n /= norm;
+    normals_row[u] = n.dot(p) > 0.f ? Eigen::Vector3f(-n) : n;
   }
-  return &cloud.points_C[j];
-}
-
-Eigen::Vector3f PixelNormal(const OrganizedCloud& cloud, int u, int v, int s, float jump_ratio) {
-  const Eigen::Vector3f nan3 = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
-  const Eigen::Vector3f& p = cloud.points_C[v * cloud.width + u];
-  const Eigen::Vector3f* right = ContinuousNeighbour(cloud, u, v, s, 0, jump_ratio, s);
-  const Eigen::Vector3f* left = ContinuousNeighbour(cloud, u, v, -s, 0, jump_ratio, s);
-  const Eigen::Vector3f* down = ContinuousNeighbour(cloud, u, v, 0, s, jump_ratio, s);
-  const Eigen::Vector3f* up = ContinuousNeighbour(cloud, u, v, 0, -s, jump_ratio, s);
-  if ((right == nullptr && left == nullptr) || (down == nullptr && up == nullptr)) return nan3;
-  // Central differences where both sides exist, one-sided at borders and depth edges.
-  const Eigen::Vector3f dx = (right ? *right : p) - (left ? *left : p);
-  const Eigen::Vector3f dy = (down ? *down : p) - (up ? *up : p);
-  Eigen::Vector3f n = dx.cross(dy);
-  const float norm = n.norm();
-  if (!(norm > 0.f)) return nan3;
-  n /= norm;
-  return n.dot(p) > 0.f ? Eigen::Vector3f(-n) : n;
 }
 
 }  // namespace
@@ -47,10 +52,7 @@ std::vector<Eigen::Vector3f> ComputeNormals(const OrganizedCloud& cloud_C, int s
   std::vector<Eigen::Vector3f> normals(
       cloud_C.size(), Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN()));
   for (int v = 0; v < cloud_C.height; ++v) {
-    for (int u = 0; u < cloud_C.width; ++u) {
-      const int i = v * cloud_C.width + u;
-      if (cloud_C.IsValid(i)) normals[i] = PixelNormal(cloud_C, u, v, step_px, jump_ratio);
-    }
+    RowNormals(cloud_C, v, step_px, jump_ratio, &normals[static_cast<size_t>(v) * cloud_C.width]);
   }
   return normals;
 }
