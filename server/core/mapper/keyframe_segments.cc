@@ -86,7 +86,10 @@ std::vector<int> CropToBox(std::vector<int> pixels, const BoundingBox2D& box, in
                            const DetectionSegmentConfig& config) {
   const BoundingBox2D grown = DilateDetectionBox(box, config);
   pixels.erase(std::remove_if(pixels.begin(), pixels.end(),
-                              [&](int i) { return !Inside(grown, i % width, i / width); }),
+                              [&](int i) {
+                                const int v = i / width;
+                                return !Inside(grown, i - v * width, v);
+                              }),
                pixels.end());
   return pixels;
 }

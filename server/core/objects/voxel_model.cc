@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "types/rounding.h"
+
 namespace objmap {
 namespace {
 
@@ -53,9 +55,9 @@ ColoredPoints VoxelModel::Points() const {
     const double inv = 1.0 / voxel.count;
     out.points.push_back((voxel.sum_xyz * inv).cast<float>());
     const Eigen::Vector3d rgb = voxel.sum_rgb * inv;
-    out.colors.push_back({static_cast<std::uint8_t>(std::lround(rgb.x())),
-                          static_cast<std::uint8_t>(std::lround(rgb.y())),
-                          static_cast<std::uint8_t>(std::lround(rgb.z()))});
+    out.colors.push_back({static_cast<std::uint8_t>(RoundNonNegative(rgb.x())),
+                          static_cast<std::uint8_t>(RoundNonNegative(rgb.y())),
+                          static_cast<std::uint8_t>(RoundNonNegative(rgb.z()))});
   }
   return out;
 }
