@@ -7,6 +7,7 @@
 #include <random>
 
 #include "segmentation/segmentation_internal.h"
+#include "segmentation/sse_lanes.h"
 
 namespace objmap::seg {
 namespace {
@@ -49,6 +50,37 @@ Plane FitPlane(const OrganizedCloud& cloud, const std::vector<int>& indices) {
   return plane;
 }
 
+#if defined(__SSE2__)
+// InlierTest::operator() for four points at once, with its float operations in its order.
+__m128 InlierLanes(const Plane& plane, const InlierTest& inlier, const Lanes& p, const Lanes& n) {
+  const Lanes normal{_mm_set1_ps(plane.normal.x()), _mm_set1_ps(plane.normal.y()),
+                     _mm_set1_ps(plane.normal.z())};
+  // std::max(1.f, z * z) is z * z when 1 < z * z, else 1: exactly maxps(z * z, 1).
+  const __m128 tolerance = _mm_mul_ps(_mm_set1_ps(inlier.distance_m),
+                                      _mm_max_ps(_mm_mul_ps(p.z, p.z), _mm_set1_ps(1.f)));
+  const __m128 distance =
+      _mm_andnot_ps(_mm_set1_ps(-0.f), _mm_add_ps(Dot(normal, p), _mm_set1_ps(plane.offset)));
+  return _mm_and_ps(_mm_cmple_ps(distance, tolerance),
+                    _mm_cmpge_ps(Dot(normal, n), _mm_set1_ps(inlier.cos_angle)));
+}
+#endif
+
+size_t CountInliers(const Plane& plane, const InlierTest& inlier,
+                    const std::vector<Eigen::Vector3f>& points,
+                    const std::vector<Eigen::Vector3f>& normals) {
+  size_t count = 0;
+  size_t k = 0;
+#if defined(__SSE2__)
+  for (; k + 4 <= points.size(); k += 4) {
+    const int mask =
+        _mm_movemask_ps(InlierLanes(plane, inlier, LoadLanes(&points[k]), LoadLanes(&normals[k])));
+    count += static_cast<size_t>(__builtin_popcount(mask));
+  }
+#endif
+  for (; k < points.size(); ++k) count += inlier(plane, points[k], normals[k]) ? 1 : 0;
+  return count;
+}
+
 // Best point+normal hypothesis over the remaining samples, refined on its inliers.
 bool FindPlane(const OrganizedCloud& cloud, const std::vector<Eigen::Vector3f>& normals,
                const std::vector<int>& samples, const InlierTest& inlier, int iterations,
@@ -65,10 +97,7 @@ bool FindPlane(const OrganizedCloud& cloud, const std::vector<Eigen::Vector3f>& 
   for (int it = 0; it < iterations; ++it) {
     const int seed = samples[pick(*rng)];
     Plane candidate{normals[seed], -normals[seed].dot(cloud.points_C[seed])};
-    size_t count = 0;
-    for (size_t k = 0; k < scored_points.size(); ++k) {
-      count += inlier(candidate, scored_points[k], scored_normals[k]) ? 1 : 0;
-    }
+    const size_t count = CountInliers(candidate, inlier, scored_points, scored_normals);
     if (count > best_count) {
       best_count = count;
       *plane = candidate;
@@ -95,16 +124,43 @@ std::vector<bool> AssignPlanes(const OrganizedCloud& cloud,
                                std::vector<std::int8_t>* plane_of_pixel) {
   std::vector<float> area_m2(planes.size(), 0.f);
   std::vector<bool> large(planes.size(), false);
-  for (size_t i = 0; i < cloud.size(); ++i) {
-    if (!cloud.IsValid(static_cast<int>(i)) || !normals[i].allFinite()) continue;
-    const Eigen::Vector3f& p = cloud.points_C[i];
+  // Pixels take their plane in pixel order, so each plane's area sums in that order.
+  auto take = [&](size_t i, size_t k) {
+    (*plane_of_pixel)[i] = static_cast<std::int8_t>(k);
+    if (!large[k]) {
+      area_m2[k] += PixelAreaM2(cloud.points_C[i], planes[k].normal, focal_px);
+      large[k] = !(area_m2[k] < min_area_m2);
+    }
+  };
+  size_t i = 0;
+#if defined(__SSE2__)
+  std::vector<int> plane_of_lane(4);
+  for (; i + 4 <= cloud.size(); i += 4) {
+    const Lanes p = LoadLanes(&cloud.points_C[i]);
+    const Lanes n = LoadLanes(&normals[i]);
+    __m128 free =
+        _mm_and_ps(Finite(p.z), _mm_and_ps(Finite(n.x), _mm_and_ps(Finite(n.y), Finite(n.z))));
+    if (_mm_movemask_ps(free) == 0) continue;
+    std::fill(plane_of_lane.begin(), plane_of_lane.end(), -1);
     for (size_t k = 0; k < planes.size(); ++k) {
-      if (!inlier(planes[k], p, normals[i])) continue;
-      (*plane_of_pixel)[i] = static_cast<std::int8_t>(k);
-      if (!large[k]) {
-        area_m2[k] += PixelAreaM2(p, planes[k].normal, focal_px);
-        large[k] = !(area_m2[k] < min_area_m2);
+      const __m128 taken = _mm_and_ps(free, InlierLanes(planes[k], inlier, p, n));
+      const int mask = _mm_movemask_ps(taken);
+      for (int lane = 0; lane < 4; ++lane) {
+        if (mask & (1 << lane)) plane_of_lane[lane] = static_cast<int>(k);
       }
+      free = _mm_andnot_ps(taken, free);
+      if (_mm_movemask_ps(free) == 0) break;
+    }
+    for (int lane = 0; lane < 4; ++lane) {
+      if (plane_of_lane[lane] >= 0) take(i + lane, static_cast<size_t>(plane_of_lane[lane]));
+    }
+  }
+#endif
+  for (; i < cloud.size(); ++i) {
+    if (!cloud.IsValid(static_cast<int>(i)) || !normals[i].allFinite()) continue;
+    for (size_t k = 0; k < planes.size(); ++k) {
+      if (!inlier(planes[k], cloud.points_C[i], normals[i])) continue;
+      take(i, k);
       break;
     }
   }

@@ -1,13 +1,10 @@
 // Per-pixel normals and the focal length, straight from the organized grid.
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
 #include "segmentation/segmentation_internal.h"
+#include "segmentation/sse_lanes.h"
 
 namespace objmap::seg {
 namespace {
@@ -47,38 +44,15 @@ Eigen::Vector3f PixelNormal(const NormalRows& rows, int u, int width, int s, flo
 }
 
 #if defined(__SSE2__)
-// Four points of an array of Eigen::Vector3f as x, y and z lanes.
-struct Lanes {
-  __m128 x, y, z;
-};
-
-Lanes Load4(const Eigen::Vector3f* points) {
-  alignas(16) float x[4], y[4], z[4];
-  for (int k = 0; k < 4; ++k) {
-    x[k] = points[k].x();
-    y[k] = points[k].y();
-    z[k] = points[k].z();
-  }
-  return {_mm_load_ps(x), _mm_load_ps(y), _mm_load_ps(z)};
-}
-
-__m128 Select(__m128 mask, __m128 a, __m128 b) {
-  return _mm_or_ps(_mm_and_ps(mask, a), _mm_andnot_ps(mask, b));
-}
-
-Lanes Select(__m128 mask, const Lanes& a, const Lanes& b) {
-  return {Select(mask, a.x, b.x), Select(mask, a.y, b.y), Select(mask, a.z, b.z)};
-}
-
 // PixelNormal for four pixels that have all four neighbours inside the image, with the same
 // float operations in the same order (Eigen's cross, its sum x + (y + z) for dot products and
 // norms, a division per component), so the result is the same to the bit.
 void FourNormals(const NormalRows& rows, int u, int s, float jump_ratio, Eigen::Vector3f* out) {
-  const Lanes p = Load4(&rows.row[u]);
-  const Lanes right = Load4(&rows.row[u + s]);
-  const Lanes left = Load4(&rows.row[u - s]);
-  const Lanes down = Load4(&rows.down[u]);
-  const Lanes up = Load4(&rows.up[u]);
+  const Lanes p = LoadLanes(&rows.row[u]);
+  const Lanes right = LoadLanes(&rows.row[u + s]);
+  const Lanes left = LoadLanes(&rows.row[u - s]);
+  const Lanes down = LoadLanes(&rows.down[u]);
+  const Lanes up = LoadLanes(&rows.up[u]);
   const __m128 sign = _mm_set1_ps(-0.f);
   const __m128 ratio_step = _mm_set1_ps(jump_ratio * static_cast<float>(s));
   // std::min(z, q) is q when q < z, else z: exactly minps(q, z).
@@ -90,7 +64,7 @@ void FourNormals(const NormalRows& rows, int u, int s, float jump_ratio, Eigen::
   const __m128 has_left = continuous(left.z);
   const __m128 has_down = continuous(down.z);
   const __m128 has_up = continuous(up.z);
-  const __m128 finite = _mm_cmplt_ps(_mm_andnot_ps(sign, p.z), _mm_set1_ps(INFINITY));
+  const __m128 finite = Finite(p.z);
   const __m128 usable =
       _mm_and_ps(finite, _mm_and_ps(_mm_or_ps(has_right, has_left), _mm_or_ps(has_down, has_up)));
   const Lanes a = Select(has_right, right, p);
@@ -106,9 +80,7 @@ void FourNormals(const NormalRows& rows, int u, int s, float jump_ratio, Eigen::
       _mm_add_ps(_mm_mul_ps(n.x, n.x), _mm_add_ps(_mm_mul_ps(n.y, n.y), _mm_mul_ps(n.z, n.z))));
   const __m128 valid = _mm_and_ps(usable, _mm_cmpgt_ps(norm, _mm_setzero_ps()));
   n = {_mm_div_ps(n.x, norm), _mm_div_ps(n.y, norm), _mm_div_ps(n.z, norm)};
-  const __m128 facing_away = _mm_cmpgt_ps(
-      _mm_add_ps(_mm_mul_ps(n.x, p.x), _mm_add_ps(_mm_mul_ps(n.y, p.y), _mm_mul_ps(n.z, p.z))),
-      _mm_setzero_ps());
+  const __m128 facing_away = _mm_cmpgt_ps(Dot(n, p), _mm_setzero_ps());
   const __m128 flip = _mm_and_ps(facing_away, sign);
   const __m128 nan = _mm_set1_ps(kNaN);
   alignas(16) float x[4], y[4], z[4];
