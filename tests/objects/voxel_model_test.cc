@@ -52,12 +52,25 @@ std::vector<std::tuple<float, float, float, std::array<std::uint8_t, 3>>> Sorted
   return out;
 }
 
+// Points in raster order 1 mm apart, as a segment's pixels arrive: runs share a voxel.
+ColoredPoints RasterPoints(int count) {
+  ColoredPoints points;
+  for (int k = 0; k < count; ++k) {
+    points.points.emplace_back(0.001f * static_cast<float>(k % 97),
+                               0.001f * static_cast<float>(k / 97), 1.f);
+    points.colors.push_back({static_cast<std::uint8_t>(k % 256), 7, 9});
+  }
+  return points;
+}
+
 TEST(VoxelDownsampleTest, SameMeansAsVoxelModelInOrderOfFirstArrival) {
   constexpr float kVoxelM = 0.005f;
   for (bool with_colors : {false, true}) {
-    for (int count : {1, 50, 5000, 60000}) {
+    for (int count : {1, 50, 5000, 60000, -5000}) {
       SCOPED_TRACE(std::to_string(count) + (with_colors ? " coloured" : "") + " points");
-      const ColoredPoints points = RandomPoints(count, with_colors, 17 + count);
+      ColoredPoints points =
+          count > 0 ? RandomPoints(count, with_colors, 17 + count) : RasterPoints(-count);
+      if (!with_colors) points.colors.clear();
       const ColoredPoints downsampled = VoxelDownsample(points, kVoxelM);
       VoxelModel model(kVoxelM);
       model.Insert(points);

@@ -67,7 +67,21 @@ TEST(SegmentIndexTest, HoldsEverySegmentsPixelsInOrder) {
     const std::vector<int> indexed(index.pixel_ids.begin() + index.offsets[s],
                                    index.pixel_ids.begin() + index.offsets[s + 1]);
     EXPECT_EQ(indexed, expected) << "segment " << s;
-    EXPECT_EQ(index.segments[s].pixels, static_cast<int>(expected.size()));
+    ASSERT_EQ(index.segments[s].pixels, static_cast<int>(expected.size()));
+    double sum_z = 0.0;
+    int u_min = seg.width, v_min = seg.height, u_max = -1, v_max = -1;
+    for (int i : expected) {
+      sum_z += scene.cloud_C.points_C[i].z();
+      u_min = std::min(u_min, i % seg.width);
+      u_max = std::max(u_max, i % seg.width);
+      v_min = std::min(v_min, i / seg.width);
+      v_max = std::max(v_max, i / seg.width);
+    }
+    EXPECT_EQ(index.segments[s].sum_z, sum_z) << "segment " << s;
+    EXPECT_EQ(std::vector<int>({index.segments[s].u_min, index.segments[s].v_min,
+                                index.segments[s].u_max, index.segments[s].v_max}),
+              std::vector<int>({u_min, v_min, u_max, v_max}))
+        << "segment " << s;
   }
   SegmentationResult other = seg;
   other.num_segments += 1;

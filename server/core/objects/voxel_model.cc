@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "types/rounding.h"
 
@@ -109,10 +110,17 @@ ColoredPoints VoxelDownsample(const ColoredPoints& points, float voxel_size_m) {
   VoxelSlots slots(points.size());
   std::vector<std::uint64_t> keys;
   std::vector<VoxelSums> sums;
+  // Neighbouring pixels often share a voxel: the last one is tried before the table.
+  std::uint64_t last_key = 0;
+  std::size_t last_slot = SIZE_MAX;
   for (std::size_t i = 0; i < points.points.size(); ++i) {
     const Eigen::Vector3f& p = points.points[i];
     if (!p.allFinite()) continue;
-    const std::size_t slot = slots.SlotOf(VoxelKey(p, voxel_size_m), &keys);
+    const std::uint64_t key = VoxelKey(p, voxel_size_m);
+    const std::size_t slot =
+        last_slot != SIZE_MAX && key == last_key ? last_slot : slots.SlotOf(key, &keys);
+    last_key = key;
+    last_slot = slot;
     if (slot == sums.size()) sums.emplace_back();
     VoxelSums& voxel = sums[slot];
     voxel.xyz += p.cast<double>();

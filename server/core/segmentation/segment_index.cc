@@ -1,6 +1,7 @@
 #include "segmentation/segment_index.h"
 
 #include <algorithm>
+#include <cstdint>
 
 namespace objmap {
 
@@ -18,20 +19,30 @@ SegmentIndex IndexSegments(const SegmentationResult& segmentation, const Organiz
     return index;
   }
   index.segments.resize(segmentation.num_segments);
-  for (int v = 0, i = 0; v < segmentation.height; ++v) {
-    for (int u = 0; u < segmentation.width; ++u, ++i) {
-      const int s = segmentation.labels[i];
-      if (s < 0 || s >= segmentation.num_segments) continue;
-      SegmentIndex::Segment& segment = index.segments[s];
-      if (segment.pixels == 0) {
-        segment.u_min = segment.u_max = u;
-        segment.v_min = segment.v_max = v;
+  // Row by row in runs of one label: the extent changes once per run, the depth sum takes every
+  // pixel in order.
+  const int w = segmentation.width;
+  for (int v = 0; v < segmentation.height; ++v) {
+    const std::int32_t* labels = &segmentation.labels[static_cast<size_t>(v) * w];
+    const Eigen::Vector3f* points = &cloud_C.points_C[static_cast<size_t>(v) * w];
+    for (int u = 0; u < w;) {
+      const int s = labels[u];
+      int end = u + 1;
+      while (end < w && labels[end] == s) ++end;
+      if (s >= 0 && s < segmentation.num_segments) {
+        SegmentIndex::Segment& segment = index.segments[s];
+        if (segment.pixels == 0) {
+          segment.u_min = u;
+          segment.u_max = end - 1;
+          segment.v_min = v;
+        }
+        segment.pixels += end - u;
+        for (int k = u; k < end; ++k) segment.sum_z += points[k].z();
+        segment.u_min = std::min(segment.u_min, u);
+        segment.u_max = std::max(segment.u_max, end - 1);
+        segment.v_max = v;  // rows are visited in order
       }
-      ++segment.pixels;
-      segment.sum_z += cloud_C.points_C[i].z();
-      segment.u_min = std::min(segment.u_min, u);
-      segment.u_max = std::max(segment.u_max, u);
-      segment.v_max = v;  // rows are visited in order
+      u = end;
     }
   }
   // Counting sort of the pixels by segment keeps each segment's pixels ascending.

@@ -58,17 +58,22 @@ void DropSmallPlanePatches(const SegmenterConfig& config, std::vector<seg::Super
   for (size_t s = 0; s < svs.size(); ++s) {
     if (svs[s].plane >= 0) area_m2[patches.Find(static_cast<int>(s))] += svs[s].area_m2;
   }
-  bool changed = false;
+  std::vector<bool> changed(svs.size(), false);
+  bool any_changed = false;
   for (size_t s = 0; s < svs.size(); ++s) {
     if (svs[s].plane < 0) continue;
     if (area_m2[patches.Find(static_cast<int>(s))] < config.min_plane_patch_area_m2) {
       svs[s].plane = -1;
-      changed = true;
+      changed[s] = true;
+      any_changed = true;
     }
   }
-  if (!changed) return;
+  if (!any_changed) return;
+  // Only edges at a supervoxel that left its plane weigh differently now.
   for (seg::GraphEdge& e : *edges) {
-    e.weight = seg::EdgeWeight(svs[e.a], svs[e.b], config.convex_tolerance);
+    if (changed[e.a] || changed[e.b]) {
+      e.weight = seg::EdgeWeight(svs[e.a], svs[e.b], config.convex_tolerance);
+    }
   }
 }
 
