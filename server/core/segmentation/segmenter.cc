@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstring>
 #include <numeric>
+#include <utility>
 
 #include "segmentation/segmentation_internal.h"
 
@@ -78,12 +79,12 @@ void DropSmallPlanePatches(const SegmenterConfig& config, std::vector<seg::Super
 }
 
 // Stable sort by weight: ties keep the graph's (a, b) order, which the cut's result depends on.
-// Weights are >= 0, so their bit patterns order like the floats; each non-zero edge sorts as one
-// 64-bit key (weight bits, position). Edges inside one plane (weight 0, often half of them)
-// need no sorting at all.
+// Weights are >= 0, so their bit patterns order like the floats: a least-significant-digit radix
+// sort on those bits, one byte per pass, is stable and needs no comparisons. Edges inside one
+// plane (weight 0, often half of them) are already in place in front.
 void SortByWeight(std::vector<seg::GraphEdge>* edges) {
-  std::vector<std::uint64_t> keys;
   std::vector<seg::GraphEdge> sorted;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> keys;  // (weight bits, edge)
   sorted.reserve(edges->size());
   for (size_t k = 0; k < edges->size(); ++k) {
     const float weight = (*edges)[k].weight;
@@ -93,10 +94,17 @@ void SortByWeight(std::vector<seg::GraphEdge>* edges) {
     }
     std::uint32_t bits = 0;
     std::memcpy(&bits, &weight, sizeof(bits));
-    keys.push_back((static_cast<std::uint64_t>(bits) << 32) | k);
+    keys.emplace_back(bits, static_cast<std::uint32_t>(k));
   }
-  std::sort(keys.begin(), keys.end());
-  for (std::uint64_t key : keys) sorted.push_back((*edges)[key & 0xffffffffu]);
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> buffer(keys.size());
+  for (int shift = 0; shift < 32; shift += 8) {
+    size_t count[257] = {};
+    for (const auto& key : keys) ++count[((key.first >> shift) & 0xff) + 1];
+    for (int digit = 0; digit < 256; ++digit) count[digit + 1] += count[digit];
+    for (const auto& key : keys) buffer[count[(key.first >> shift) & 0xff]++] = key;
+    keys.swap(buffer);
+  }
+  for (const auto& key : keys) sorted.push_back((*edges)[key.second]);
   edges->swap(sorted);
 }
 

@@ -74,7 +74,7 @@ size_t CountInliers(const Plane& plane, const InlierTest& inlier,
   for (; k + 4 <= points.size(); k += 4) {
     const int mask =
         _mm_movemask_ps(InlierLanes(plane, inlier, LoadLanes(&points[k]), LoadLanes(&normals[k])));
-    count += static_cast<size_t>(__builtin_popcount(mask));
+    count += static_cast<size_t>((mask & 1) + ((mask >> 1) & 1) + ((mask >> 2) & 1) + (mask >> 3));
   }
 #endif
   for (; k < points.size(); ++k) count += inlier(plane, points[k], normals[k]) ? 1 : 0;
