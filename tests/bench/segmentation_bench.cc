@@ -1,6 +1,10 @@
 // objmap's segmentation against PCL SupervoxelClustering + LCCPSegmentation, in one run:
-//  - mOSD learn clouds: ms per cloud (median, p90) and quality against the ground truth (rates of
-//    segmentation/mosd_ground_truth.h: over-segmentation, under-segmentation, object recall);
+//  - mOSD learn clouds: ms per cloud (median, p90) and quality against the ground truth, as
+//    defined in segmentation/mosd_ground_truth.h and applied identically to both methods:
+//    over-segmentation rate = share of the ground-truth objects' points outside each object's
+//    best-overlapping segment; under-segmentation rate = share of the segments' labelled points
+//    that belong to another region (object or table) than the segment's dominant one; object
+//    recall = objects whose best segment has IoU >= 0.5 (both rates point-weighted, 0 is best);
 //  - redkitchen 640x480 frames: ms per frame for Segmenter::Segment, for the mapper's whole
 //    segmentation step (Mapper::AddKeyframe's timings.segmentation_ms: back-projection,
 //    segmentation, detection-to-segment for every CenterNet detection, keyframe record) and its
