@@ -1,9 +1,7 @@
 // Segmentation quality on the modified Object Segmentation Database (mOSD, learn set) and speed
 // on a real 7-Scenes depth frame.
 //
-// Metrics (per cloud, then mean), with ground-truth regions: every label >= 20 is one object
-// (mOSD gives disjoint parts of one object different labels, which a model-free method cannot
-// join), labels 1-9 together are the table.
+// Metrics (per cloud, then mean), with the ground-truth regions of mosd_ground_truth.h:
 //  - over-segmentation of a GT object: number of predicted segments needed (largest first) to
 //    cover 80% of its points, minus 1; 0 is perfect.
 //  - under-segmentation: a predicted segment with >= 50 labelled points counts as an error when
@@ -19,6 +17,7 @@
 
 #include "dataset/sequence_reader.h"
 #include "pointcloud_io/pointcloud_io.h"
+#include "segmentation/mosd_ground_truth.h"
 #include "segmentation/segmenter.h"
 #include "test_data.h"
 
@@ -33,23 +32,6 @@ struct CloudMetrics {
   double ms = 0.0;
   int segments = 0;
 };
-
-// Region per point: -1 unlabelled, 0 table, 1.. one per distinct object label.
-std::vector<int> GroundTruthRegions(const std::vector<std::uint32_t>& labels, int* num_regions) {
-  std::map<std::uint32_t, int> object_ids;
-  for (std::uint32_t l : labels) {
-    if (l >= 20 && !object_ids.count(l)) object_ids.emplace(l, 0);
-  }
-  int next = 1;
-  for (auto& entry : object_ids) entry.second = next++;
-  *num_regions = next;
-  std::vector<int> regions(labels.size(), -1);
-  for (size_t i = 0; i < labels.size(); ++i) {
-    if (labels[i] >= 1 && labels[i] <= 9) regions[i] = 0;
-    if (labels[i] >= 20) regions[i] = object_ids[labels[i]];
-  }
-  return regions;
-}
 
 void ScoreObjects(const std::vector<std::vector<int>>& overlap, const std::vector<int>& pred_sizes,
                   CloudMetrics* m) {
@@ -78,7 +60,7 @@ void ScoreObjects(const std::vector<std::vector<int>>& overlap, const std::vecto
 
 CloudMetrics Evaluate(const SegmentationResult& seg, const std::vector<std::uint32_t>& labels) {
   int num_regions = 0;
-  const std::vector<int> regions = GroundTruthRegions(labels, &num_regions);
+  const std::vector<int> regions = testing::GroundTruthRegions(labels, &num_regions);
   std::vector<std::vector<int>> overlap(num_regions, std::vector<int>(seg.num_segments, 0));
   std::vector<int> pred_sizes(seg.num_segments, 0);
   for (size_t i = 0; i < labels.size(); ++i) {
@@ -101,13 +83,7 @@ CloudMetrics Evaluate(const SegmentationResult& seg, const std::vector<std::uint
 }
 
 std::vector<std::string> MosdClouds() {
-  std::vector<std::string> paths;
-  for (const auto& entry :
-       std::filesystem::directory_iterator(testing::SharedDataPath("mosd-learn"))) {
-    if (entry.path().extension() == ".pcd") paths.push_back(entry.path().string());
-  }
-  std::sort(paths.begin(), paths.end());
-  return paths;
+  return testing::MosdCloudPaths(testing::SharedDataPath("mosd-learn"));
 }
 
 TEST(MosdSegmentationTest, MatchesGroundTruth) {

@@ -66,5 +66,37 @@ TEST(OrganizedCloud, BackProjectsThroughIntrinsics) {
   EXPECT_NEAR(cloud.points_C[7].z(), 4.0, 1e-6);
 }
 
+// Colour of the depth image's size is copied; any other size is sampled at the scaled pixel.
+// Both must give each point the colour of its pixel.
+TEST(OrganizedCloud, BackProjectTakesEachPixelsColour) {
+  for (int scale : {1, 2}) {
+    DepthImage depth;
+    depth.width = 5;
+    depth.height = 3;
+    depth.depth_m.assign(15, 1.f);
+    depth.depth_m[4] = 0.f;  // invalid points keep their colour too
+    ColorImage color;
+    color.width = 5 * scale;
+    color.height = 3 * scale;
+    for (int k = 0; k < color.width * color.height * 3; ++k) {
+      color.rgb.push_back(static_cast<std::uint8_t>(k * 7 % 251));
+    }
+    CameraIntrinsics K;
+    K.width = 5;
+    K.height = 3;
+    const OrganizedCloud cloud = BackProject(depth, color, K);
+    ASSERT_EQ(cloud.rgb.size(), 15u);
+    for (int v = 0; v < 3; ++v) {
+      for (int u = 0; u < 5; ++u) {
+        const std::size_t c = (static_cast<std::size_t>(v * scale) * color.width + u * scale) * 3;
+        const std::array<std::uint8_t, 3> expected = {color.rgb[c], color.rgb[c + 1],
+                                                      color.rgb[c + 2]};
+        EXPECT_EQ(cloud.rgb[v * 5 + u], expected)
+            << "scale " << scale << " pixel " << u << "," << v;
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace objmap

@@ -3,7 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
-#include <unordered_set>
+
+#include "segmentation/segment_index.h"
 
 namespace objmap {
 namespace {
@@ -20,28 +21,27 @@ bool Inside(const BoundingBox2D& box, int u, int v) {
 // take the plane segment with most pixels in the box, provided most of that plane lies in the box
 // (the floor or a wall seen between the table legs extends far beyond it).
 std::vector<int> SurfacePlanePixels(const SegmentationResult& segmentation,
-                                    const BoundingBox2D& box) {
+                                    const SegmentIndex& index, const BoundingBox2D& box) {
   std::vector<int> inside(segmentation.num_segments, 0);
-  std::vector<int> total(segmentation.num_segments, 0);
-  for (int v = 0; v < segmentation.height; ++v) {
-    for (int u = 0; u < segmentation.width; ++u) {
+  const int u0 = std::max(0, static_cast<int>(std::ceil(box.x_min)));
+  const int v0 = std::max(0, static_cast<int>(std::ceil(box.y_min)));
+  const int u1 = std::min(segmentation.width - 1, static_cast<int>(std::floor(box.x_max)));
+  const int v1 = std::min(segmentation.height - 1, static_cast<int>(std::floor(box.y_max)));
+  for (int v = v0; v <= v1; ++v) {
+    for (int u = u0; u <= u1; ++u) {
       const int label = segmentation.labels[v * segmentation.width + u];
-      if (label < 0 || !segmentation.segment_is_plane[label]) continue;
-      ++total[label];
-      if (Inside(box, u, v)) ++inside[label];
+      if (label >= 0 && segmentation.segment_is_plane[label]) ++inside[label];
     }
   }
   int best = -1;
   for (int s = 0; s < segmentation.num_segments; ++s) {
-    if (inside[s] * 2 < total[s]) continue;
+    const int total = segmentation.segment_is_plane[s] ? index.segments[s].pixels : 0;
+    if (inside[s] * 2 < total) continue;
     if (best < 0 || inside[s] > inside[best]) best = s;
   }
-  std::vector<int> pixels;
-  if (best < 0) return pixels;
-  for (int i = 0; i < static_cast<int>(segmentation.labels.size()); ++i) {
-    if (segmentation.labels[i] == best) pixels.push_back(i);
-  }
-  return pixels;
+  if (best < 0) return {};
+  return std::vector<int>(index.pixel_ids.begin() + index.offsets[best],
+                          index.pixel_ids.begin() + index.offsets[best + 1]);
 }
 
 // Flat objects (a screen on a wall, a keyboard on a desk) lie within depth noise of their
@@ -86,25 +86,28 @@ std::vector<int> CropToBox(std::vector<int> pixels, const BoundingBox2D& box, in
                            const DetectionSegmentConfig& config) {
   const BoundingBox2D grown = DilateDetectionBox(box, config);
   pixels.erase(std::remove_if(pixels.begin(), pixels.end(),
-                              [&](int i) { return !Inside(grown, i % width, i / width); }),
+                              [&](int i) {
+                                const int v = i / width;
+                                return !Inside(grown, i - v * width, v);
+                              }),
                pixels.end());
   return pixels;
 }
 
 // The pixels of one detection: supporting surfaces take their plane, flat objects the part of
 // the plane in their box, everything else the segments SelectDetectionPixels picks.
-std::vector<int> DetectionPixels(const SegmentationResult& segmentation,
-                                 const OrganizedCloud& cloud_C, const BoundingBox2D& box,
-                                 int class_id, const MapperConfig& config) {
+std::vector<int> DetectionPixels(const SegmentationResult& segmentation, const SegmentIndex& index,
+                                 const BoundingBox2D& box, int class_id,
+                                 const MapperConfig& config) {
   if (Contains(config.surface_classes, class_id)) {
-    std::vector<int> pixels = SurfacePlanePixels(segmentation, box);
+    std::vector<int> pixels = SurfacePlanePixels(segmentation, index, box);
     if (!pixels.empty()) return pixels;
   }
   if (Contains(config.flat_classes, class_id)) {
     std::vector<int> pixels = FlatObjectPixels(segmentation, box, config.flat_box_shrink_fraction);
     if (!pixels.empty()) return pixels;
   }
-  return SelectDetectionPixels(segmentation, cloud_C, box, config.detection_segment);
+  return SelectDetectionPixels(segmentation, index, box, config.detection_segment);
 }
 
 ColoredPoints SegmentPoints(const OrganizedCloud& cloud_C, const std::vector<int>& pixels,
@@ -119,11 +122,24 @@ ColoredPoints SegmentPoints(const OrganizedCloud& cloud_C, const std::vector<int
   return VoxelDownsample(points, voxel_size_m);
 }
 
+// The pixels one observation claimed, as a bit per pixel of the frame: cheaper to build and to
+// query than a hash set of up to a few 10^4 pixel indices per detection.
+class PixelClaim {
+ public:
+  PixelClaim(const std::vector<int>& pixels, std::size_t frame_pixels) : bits_(frame_pixels) {
+    for (int i : pixels) bits_[i] = true;
+  }
+  [[nodiscard]] bool Has(int i) const { return bits_[i]; }
+
+ private:
+  std::vector<bool> bits_;
+};
+
 // Fraction of `pixels` already claimed by `claimed`.
-float ClaimedFraction(const std::vector<int>& pixels, const std::unordered_set<int>& claimed) {
+float ClaimedFraction(const std::vector<int>& pixels, const PixelClaim& claimed) {
   if (pixels.empty()) return 0.f;
   const auto hits =
-      std::count_if(pixels.begin(), pixels.end(), [&](int i) { return claimed.count(i) > 0; });
+      std::count_if(pixels.begin(), pixels.end(), [&](int i) { return claimed.Has(i); });
   return static_cast<float>(hits) / static_cast<float>(pixels.size());
 }
 
@@ -184,8 +200,11 @@ std::vector<SegmentedDetection> SegmentDetections(
   std::iota(order.begin(), order.end(), 0);
   std::stable_sort(order.begin(), order.end(),
                    [&](int a, int b) { return detections[a].score > detections[b].score; });
+  // Built once: every detection box then costs its own area, not a pass over the image.
+  const SegmentIndex index = IndexSegments(segmentation, cloud_C);
   std::vector<SegmentedDetection> segmented;
-  std::vector<std::unordered_set<int>> claimed;
+  const std::size_t frame_pixels = segmentation.labels.size();
+  std::vector<PixelClaim> claimed;
   std::vector<BoundingBox2D> depth_boxes;  // of each entry, in depth pixels
   auto make_entry = [&](const Detection& detection, const std::vector<int>& pixels,
                         SegmentedDetection* entry) {
@@ -205,7 +224,7 @@ std::vector<SegmentedDetection> SegmentDetections(
     if (detection.score < config.min_detection_score || detection.box.Area() <= 0.f) continue;
     const BoundingBox2D box = ToDepthPixels(detection.box, frame.color, frame.depth);
     const std::vector<int> pixels =
-        CropToBox(DetectionPixels(segmentation, cloud_C, box, detection.class_id, config), box,
+        CropToBox(DetectionPixels(segmentation, index, box, detection.class_id, config), box,
                   segmentation.width, config.detection_segment);
     if (pixels.empty()) continue;
     bool handled = false;
@@ -223,7 +242,7 @@ std::vector<SegmentedDetection> SegmentDetections(
           BoxIou(depth_boxes[k], box) < config.split_max_box_iou) {
         std::vector<int> joined = segmented[k].pixels;
         for (int i : pixels) {
-          if (claimed[k].count(i) == 0) joined.push_back(i);
+          if (!claimed[k].Has(i)) joined.push_back(i);
         }
         std::vector<int> pixels_k, pixels_d;
         SplitBetweenBoxes(joined, segmentation.width, depth_boxes[k], box, &pixels_k, &pixels_d);
@@ -232,8 +251,8 @@ std::vector<SegmentedDetection> SegmentDetections(
           kept.observation.box = earlier.box;
           kept.observation.class_scores = earlier.class_scores;
           segmented[k] = std::move(kept);
-          claimed[k] = std::unordered_set<int>(pixels_k.begin(), pixels_k.end());
-          claimed.emplace_back(pixels_d.begin(), pixels_d.end());
+          claimed[k] = PixelClaim(pixels_k, frame_pixels);
+          claimed.emplace_back(pixels_d, frame_pixels);
           depth_boxes.push_back(box);
           segmented.push_back(std::move(added));
           continue;
@@ -244,7 +263,7 @@ std::vector<SegmentedDetection> SegmentDetections(
     if (handled) continue;
     SegmentedDetection entry;
     if (!make_entry(detection, pixels, &entry)) continue;
-    claimed.emplace_back(pixels.begin(), pixels.end());
+    claimed.emplace_back(pixels, frame_pixels);
     depth_boxes.push_back(box);
     segmented.push_back(std::move(entry));
   }

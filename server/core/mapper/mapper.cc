@@ -13,6 +13,7 @@
 
 #include "mapper/keyframe_segments.h"
 #include "types/organized_cloud.h"
+#include "types/rounding.h"
 
 namespace objmap {
 namespace {
@@ -74,7 +75,7 @@ KeyframeRecord MakeRecord(const RgbdFrame& frame,
   for (std::size_t i = 0; i < record.depth_mm.size(); ++i) {
     const float depth_m = frame.depth.depth_m[i];
     const bool valid = std::isfinite(depth_m) && depth_m > 0.f && depth_m < 65.f;
-    record.depth_mm[i] = valid ? static_cast<std::uint16_t>(std::lround(depth_m * 1000.f)) : 0;
+    record.depth_mm[i] = valid ? static_cast<std::uint16_t>(RoundNonNegative(depth_m * 1000.f)) : 0;
   }
   record.object_mask.assign(record.depth_mm.size(), 0);
   for (const SegmentedDetection& entry : segmented) {

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+
+#include "types/rounding.h"
 
 namespace objmap {
 namespace {
@@ -10,15 +13,57 @@ namespace {
 constexpr std::int64_t kAxisOffset = 1 << 20;
 constexpr std::uint64_t kAxisMask = (1u << 21) - 1;
 
-}  // namespace
-
-std::uint64_t VoxelModel::KeyOf(const Eigen::Vector3f& p) const {
+std::uint64_t VoxelKey(const Eigen::Vector3f& p, float voxel_size_m) {
   std::uint64_t key = 0;
   for (int axis = 0; axis < 3; ++axis) {
-    const auto index = static_cast<std::int64_t>(std::floor(p[axis] / voxel_size_m_)) + kAxisOffset;
+    const auto index = static_cast<std::int64_t>(std::floor(p[axis] / voxel_size_m)) + kAxisOffset;
     key |= (static_cast<std::uint64_t>(index) & kAxisMask) << (21 * axis);
   }
   return key;
+}
+
+// Sums of one voxel of VoxelDownsample, as VoxelModel keeps them.
+struct VoxelSums {
+  Eigen::Vector3d xyz = Eigen::Vector3d::Zero();
+  Eigen::Vector3d rgb = Eigen::Vector3d::Zero();
+  std::uint32_t count = 0;
+};
+
+// Open addressing over a power-of-two table of slot ids, -1 where free: one multiply per lookup,
+// where the node-based map takes a 64-bit division and, per new voxel, an allocation.
+class VoxelSlots {
+ public:
+  explicit VoxelSlots(std::size_t max_voxels) {
+    std::size_t size = 16;
+    while (size < 2 * max_voxels) size *= 2;
+    slot_of_cell_.assign(size, -1);
+    mask_ = size - 1;
+    for (std::size_t s = size; s > 1; s /= 2) --shift_;
+  }
+
+  // The slot of `key`, a new one (numbered in order of arrival) when it is new.
+  std::size_t SlotOf(std::uint64_t key, std::vector<std::uint64_t>* keys) {
+    std::size_t cell = static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> shift_);
+    while (slot_of_cell_[cell] >= 0 && (*keys)[slot_of_cell_[cell]] != key) {
+      cell = (cell + 1) & mask_;
+    }
+    if (slot_of_cell_[cell] < 0) {
+      slot_of_cell_[cell] = static_cast<int>(keys->size());
+      keys->push_back(key);
+    }
+    return static_cast<std::size_t>(slot_of_cell_[cell]);
+  }
+
+ private:
+  std::vector<int> slot_of_cell_;
+  std::size_t mask_ = 0;
+  int shift_ = 64;
+};
+
+}  // namespace
+
+std::uint64_t VoxelModel::KeyOf(const Eigen::Vector3f& p) const {
+  return VoxelKey(p, voxel_size_m_);
 }
 
 void VoxelModel::Insert(const ColoredPoints& points) {
@@ -52,18 +97,49 @@ ColoredPoints VoxelModel::Points() const {
   for (const auto& [key, voxel] : voxels_) {
     out.points.push_back(MeanOf(voxel));
     const Eigen::Vector3d rgb = voxel.sum_rgb * (1.0 / voxel.count);
-    out.colors.push_back({static_cast<std::uint8_t>(std::lround(rgb.x())),
-                          static_cast<std::uint8_t>(std::lround(rgb.y())),
-                          static_cast<std::uint8_t>(std::lround(rgb.z()))});
+    out.colors.push_back({static_cast<std::uint8_t>(RoundNonNegative(rgb.x())),
+                          static_cast<std::uint8_t>(RoundNonNegative(rgb.y())),
+                          static_cast<std::uint8_t>(RoundNonNegative(rgb.z()))});
   }
   return out;
 }
 
 ColoredPoints VoxelDownsample(const ColoredPoints& points, float voxel_size_m) {
-  VoxelModel model(voxel_size_m);
-  model.Insert(points);
-  ColoredPoints out = model.Points();
-  if (points.colors.size() != points.points.size()) out.colors.clear();
+  const bool has_color = points.colors.size() == points.points.size();
+  VoxelSlots slots(points.size());
+  std::vector<std::uint64_t> keys;
+  std::vector<VoxelSums> sums;
+  // Neighbouring pixels often share a voxel: the last one is tried before the table.
+  std::uint64_t last_key = 0;
+  std::size_t last_slot = SIZE_MAX;
+  for (std::size_t i = 0; i < points.points.size(); ++i) {
+    const Eigen::Vector3f& p = points.points[i];
+    if (!p.allFinite()) continue;
+    const std::uint64_t key = VoxelKey(p, voxel_size_m);
+    const std::size_t slot =
+        last_slot != SIZE_MAX && key == last_key ? last_slot : slots.SlotOf(key, &keys);
+    last_key = key;
+    last_slot = slot;
+    if (slot == sums.size()) sums.emplace_back();
+    VoxelSums& voxel = sums[slot];
+    voxel.xyz += p.cast<double>();
+    if (has_color) {
+      voxel.rgb += Eigen::Vector3d(points.colors[i][0], points.colors[i][1], points.colors[i][2]);
+    }
+    ++voxel.count;
+  }
+  ColoredPoints out;
+  out.points.reserve(sums.size());
+  if (has_color) out.colors.reserve(sums.size());
+  for (const VoxelSums& voxel : sums) {
+    const double inv = 1.0 / voxel.count;
+    out.points.push_back((voxel.xyz * inv).cast<float>());
+    if (!has_color) continue;
+    const Eigen::Vector3d rgb = voxel.rgb * inv;
+    out.colors.push_back({static_cast<std::uint8_t>(RoundNonNegative(rgb.x())),
+                          static_cast<std::uint8_t>(RoundNonNegative(rgb.y())),
+                          static_cast<std::uint8_t>(RoundNonNegative(rgb.z()))});
+  }
   return out;
 }
 

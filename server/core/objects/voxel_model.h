@@ -61,7 +61,8 @@ class VoxelModel {
   std::unordered_map<std::uint64_t, Accumulator> voxels_;
 };
 
-/// Voxel-grid downsampling of one point set (same averaging as VoxelModel).
+/// Voxel-grid downsampling of one point set: the same means as a VoxelModel given these points,
+/// one per voxel in the order of each voxel's first point.
 [[nodiscard]] ColoredPoints VoxelDownsample(const ColoredPoints& points, float voxel_size_m);
 
 }  // namespace objmap

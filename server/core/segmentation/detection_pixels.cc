@@ -5,7 +5,10 @@
 // not taken along.
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
 
+#include "segmentation/segment_index.h"
 #include "segmentation/segmenter.h"
 
 namespace objmap {
@@ -51,21 +54,41 @@ PixelBox DilateAndClip(const BoundingBox2D& box, int width, int height, float di
           clip(grown.y_max, height)};
 }
 
-std::vector<SegmentStats> CollectStats(const SegmentationResult& seg, const OrganizedCloud& cloud,
+// The per-segment statistics from the index; only the `inside` counts need the box's pixels.
+std::vector<SegmentStats> CollectStats(const SegmentationResult& seg, const SegmentIndex& index,
                                        const PixelBox& box) {
   std::vector<SegmentStats> stats(seg.num_segments);
-  for (int v = 0; v < seg.height; ++v) {
-    for (int u = 0; u < seg.width; ++u) {
-      const int i = v * seg.width + u;
-      const int s = seg.labels[i];
-      if (s < 0 || s >= seg.num_segments) continue;
-      stats[s].pixels++;
-      stats[s].extent = stats[s].extent.Union({u, v, u, v});
-      stats[s].sum_z += cloud.points_C[i].z();
-      if (u >= box.u0 && u <= box.u1 && v >= box.v0 && v <= box.v1) stats[s].inside++;
+  for (int s = 0; s < seg.num_segments; ++s) {
+    const SegmentIndex::Segment& segment = index.segments[s];
+    stats[s].pixels = segment.pixels;
+    stats[s].sum_z = segment.sum_z;
+    if (segment.pixels > 0) {
+      stats[s].extent = {segment.u_min, segment.v_min, segment.u_max, segment.v_max};
+    }
+  }
+  for (int v = box.v0; v <= box.v1; ++v) {
+    const std::int32_t* row = &seg.labels[static_cast<size_t>(v) * seg.width];
+    for (int u = box.u0; u <= box.u1; ++u) {
+      const int s = row[u];
+      if (s >= 0 && s < seg.num_segments) stats[s].inside++;
     }
   }
   return stats;
+}
+
+// The pixels of the taken segments in ascending index order (the order a pass over the image
+// gives), merged from the index's per-segment lists.
+std::vector<int> GatherPixels(const SegmentIndex& index, std::vector<int> taken) {
+  std::sort(taken.begin(), taken.end());
+  std::vector<int> pixels;
+  for (int s : taken) {
+    const size_t middle = pixels.size();
+    pixels.insert(pixels.end(), index.pixel_ids.begin() + index.offsets[s],
+                  index.pixel_ids.begin() + index.offsets[s + 1]);
+    std::inplace_merge(pixels.begin(), pixels.begin() + static_cast<std::ptrdiff_t>(middle),
+                       pixels.end());
+  }
+  return pixels;
 }
 
 // Segments whose `inside` share reaches `min_fraction`, plane and oversized ones excluded.
@@ -141,16 +164,21 @@ BoundingBox2D DilateDetectionBox(const BoundingBox2D& box, const DetectionSegmen
 std::vector<int> SelectDetectionPixels(const SegmentationResult& segmentation,
                                        const OrganizedCloud& cloud_C, const BoundingBox2D& box,
                                        const DetectionSegmentConfig& config) {
+  return SelectDetectionPixels(segmentation, IndexSegments(segmentation, cloud_C), box, config);
+}
+
+std::vector<int> SelectDetectionPixels(const SegmentationResult& segmentation,
+                                       const SegmentIndex& index, const BoundingBox2D& box,
+                                       const DetectionSegmentConfig& config) {
   const size_t n = static_cast<size_t>(segmentation.width) * segmentation.height;
   if (!config.IsValid(nullptr) || n == 0 || segmentation.labels.size() != n ||
-      cloud_C.points_C.size() != n ||
       segmentation.segment_is_plane.size() != static_cast<size_t>(segmentation.num_segments) ||
-      !(box.Area() > 0.f)) {
+      !index.Matches(segmentation) || !(box.Area() > 0.f)) {
     return {};
   }
   const PixelBox pixel_box = DilateAndClip(box, segmentation.width, segmentation.height,
                                            config.dilation_px, config.dilation_fraction);
-  const std::vector<SegmentStats> stats = CollectStats(segmentation, cloud_C, pixel_box);
+  const std::vector<SegmentStats> stats = CollectStats(segmentation, index, pixel_box);
   std::vector<int> chosen =
       Candidates(stats, segmentation, pixel_box.Area(), config.min_inside_fraction, config);
   if (chosen.empty()) {
@@ -161,14 +189,7 @@ std::vector<int> SelectDetectionPixels(const SegmentationResult& segmentation,
   }
   const PixelBox detection_box =
       DilateAndClip(box, segmentation.width, segmentation.height, 0.f, 0.f);
-  std::vector<bool> take(stats.size(), false);
-  for (int s : BuildObject(chosen, stats, detection_box, config)) take[s] = true;
-  std::vector<int> pixels;
-  for (size_t i = 0; i < n; ++i) {
-    const int s = segmentation.labels[i];
-    if (s >= 0 && s < segmentation.num_segments && take[s]) pixels.push_back(static_cast<int>(i));
-  }
-  return pixels;
+  return GatherPixels(index, BuildObject(chosen, stats, detection_box, config));
 }
 
 }  // namespace objmap

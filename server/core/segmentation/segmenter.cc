@@ -3,7 +3,10 @@
 #include "segmentation/segmenter.h"
 
 #include <algorithm>
+#include <cstdint>
+#include <cstring>
 #include <numeric>
+#include <utility>
 
 #include "segmentation/segmentation_internal.h"
 
@@ -56,27 +59,60 @@ void DropSmallPlanePatches(const SegmenterConfig& config, std::vector<seg::Super
   for (size_t s = 0; s < svs.size(); ++s) {
     if (svs[s].plane >= 0) area_m2[patches.Find(static_cast<int>(s))] += svs[s].area_m2;
   }
-  bool changed = false;
+  std::vector<bool> changed(svs.size(), false);
+  bool any_changed = false;
   for (size_t s = 0; s < svs.size(); ++s) {
     if (svs[s].plane < 0) continue;
     if (area_m2[patches.Find(static_cast<int>(s))] < config.min_plane_patch_area_m2) {
       svs[s].plane = -1;
-      changed = true;
+      changed[s] = true;
+      any_changed = true;
     }
   }
-  if (!changed) return;
+  if (!any_changed) return;
+  // Only edges at a supervoxel that left its plane weigh differently now.
   for (seg::GraphEdge& e : *edges) {
-    e.weight = seg::EdgeWeight(svs[e.a], svs[e.b], config.convex_tolerance);
+    if (changed[e.a] || changed[e.b]) {
+      e.weight = seg::EdgeWeight(svs[e.a], svs[e.b], config.convex_tolerance);
+    }
   }
+}
+
+// Stable sort by weight: ties keep the graph's (a, b) order, which the cut's result depends on.
+// Weights are >= 0, so their bit patterns order like the floats: a least-significant-digit radix
+// sort on those bits, one byte per pass, is stable and needs no comparisons. Edges inside one
+// plane (weight 0, often half of them) are already in place in front.
+void SortByWeight(std::vector<seg::GraphEdge>* edges) {
+  std::vector<seg::GraphEdge> sorted;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> keys;  // (weight bits, edge)
+  sorted.reserve(edges->size());
+  for (size_t k = 0; k < edges->size(); ++k) {
+    const float weight = (*edges)[k].weight;
+    if (weight == 0.f) {
+      sorted.push_back((*edges)[k]);
+      continue;
+    }
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &weight, sizeof(bits));
+    keys.emplace_back(bits, static_cast<std::uint32_t>(k));
+  }
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> buffer(keys.size());
+  for (int shift = 0; shift < 32; shift += 8) {
+    size_t count[257] = {};
+    for (const auto& key : keys) ++count[((key.first >> shift) & 0xff) + 1];
+    for (int digit = 0; digit < 256; ++digit) count[digit + 1] += count[digit];
+    for (const auto& key : keys) buffer[count[(key.first >> shift) & 0xff]++] = key;
+    keys.swap(buffer);
+  }
+  for (const auto& key : keys) sorted.push_back((*edges)[key.second]);
+  edges->swap(sorted);
 }
 
 // Kruskal over edges sorted by weight: merge when the edge is no heavier than both segments'
 // Int(C) + k / |C| (Felzenszwalb & Huttenlocher 2004), then absorb segments under the size floor.
 void CutGraph(std::vector<seg::GraphEdge>* edges, const SegmenterConfig& config,
               Components* components) {
-  std::stable_sort(
-      edges->begin(), edges->end(),
-      [](const seg::GraphEdge& x, const seg::GraphEdge& y) { return x.weight < y.weight; });
+  SortByWeight(edges);
   for (const seg::GraphEdge& e : *edges) {
     const int a = components->Find(e.a);
     const int b = components->Find(e.b);
@@ -106,6 +142,7 @@ SegmentationResult Relabel(const OrganizedCloud& cloud, const std::vector<int>& 
   result.height = cloud.height;
   result.labels.assign(cloud.size(), -1);
   std::vector<int> segment_of_root(supervoxels.size(), -1);
+  std::vector<int> segment_of_supervoxel(supervoxels.size(), -1);
   std::vector<int> plane_pixels;
   std::vector<int> all_pixels;
   for (size_t s = 0; s < supervoxels.size(); ++s) {
@@ -116,12 +153,13 @@ SegmentationResult Relabel(const OrganizedCloud& cloud, const std::vector<int>& 
       all_pixels.push_back(0);
     }
     const int id = segment_of_root[root];
+    segment_of_supervoxel[s] = id;
     all_pixels[id] += supervoxels[s].pixels;
     if (supervoxels[s].plane >= 0) plane_pixels[id] += supervoxels[s].pixels;
   }
   for (size_t i = 0; i < cloud.size(); ++i) {
     const int s = supervoxel_of_pixel[i];
-    if (s >= 0) result.labels[i] = segment_of_root[components->Find(s)];
+    if (s >= 0) result.labels[i] = segment_of_supervoxel[s];
   }
   result.segment_is_plane.resize(result.num_segments);
   for (int id = 0; id < result.num_segments; ++id) {

@@ -100,11 +100,20 @@ struct DetectionSegmentConfig {
 [[nodiscard]] BoundingBox2D DilateDetectionBox(const BoundingBox2D& box,
                                                const DetectionSegmentConfig& config);
 
-/// Pixel indices (into the organized cloud) of the object a detection box shows: the
+/// Pixel indices (into the organized cloud), ascending, of the object a detection box shows: the
 /// non-plane segment(s) that lie mostly inside the box. Box is in depth-image pixels.
 /// Empty when nothing in the box qualifies (or when segmentation and cloud sizes differ).
 [[nodiscard]] std::vector<int> SelectDetectionPixels(const SegmentationResult& segmentation,
                                                      const OrganizedCloud& cloud_C,
+                                                     const BoundingBox2D& box,
+                                                     const DetectionSegmentConfig& config);
+
+struct SegmentIndex;  // segmentation/segment_index.h
+
+/// The same from an index of `segmentation` (IndexSegments), built once for all boxes of a
+/// frame: each box then costs its own area. Empty when the index is of another segmentation.
+[[nodiscard]] std::vector<int> SelectDetectionPixels(const SegmentationResult& segmentation,
+                                                     const SegmentIndex& index,
                                                      const BoundingBox2D& box,
                                                      const DetectionSegmentConfig& config);
 

@@ -1,6 +1,7 @@
 #include "types/organized_cloud.h"
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace objmap {
@@ -21,6 +22,8 @@ OrganizedCloud BackProject(const DepthImage& depth, const ColorImage& color,
   const float cy = static_cast<float>(intrinsics.cy);
   const float color_scale_x = has_color ? static_cast<float>(color.width) / depth.width : 0.f;
   const float color_scale_y = has_color ? static_cast<float>(color.height) / depth.height : 0.f;
+  const bool same_size =
+      color.width == depth.width && color.height == depth.height && color.rgb.size() >= n * 3;
   for (int v = 0; v < depth.height; ++v) {
     for (int u = 0; u < depth.width; ++u) {
       const size_t i = static_cast<size_t>(v) * depth.width + u;
@@ -30,7 +33,7 @@ OrganizedCloud BackProject(const DepthImage& depth, const ColorImage& color,
       } else {
         cloud.points_C[i] = Eigen::Vector3f(nan, nan, nan);
       }
-      if (has_color) {
+      if (has_color && !same_size) {
         const int cu = std::min(color.width - 1, static_cast<int>(u * color_scale_x));
         const int cv = std::min(color.height - 1, static_cast<int>(v * color_scale_y));
         const std::uint8_t* p = &color.rgb[(static_cast<size_t>(cv) * color.width + cu) * 3];
@@ -38,6 +41,9 @@ OrganizedCloud BackProject(const DepthImage& depth, const ColorImage& color,
       }
     }
   }
+  // Registered colour of the depth image's size (7-Scenes, TUM) is a plain copy: the scaled
+  // lookup above would pick pixel (u, v) itself.
+  if (has_color && same_size) std::memcpy(cloud.rgb.data(), color.rgb.data(), n * 3);
   return cloud;
 }
 
