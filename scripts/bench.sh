@@ -40,7 +40,8 @@ else
   run stages "${BENCH}/stage_bench" "${SEQUENCE}" 10 50 3
 fi
 if [[ -x "${BENCH}/segmentation_bench" && -d "${MOSD}" ]]; then
-  run segmentation "${BENCH}/segmentation_bench" "${MOSD}" "${SEQUENCE}"
+  run segmentation "${BENCH}/segmentation_bench" "${MOSD}" "${SEQUENCE}" 10 50 3 \
+    "${ROOT}/models/centernet_coco.pb" 3
 fi
 
 # The whole pipeline on the sequence: wall time and per-stage medians per keyframe.

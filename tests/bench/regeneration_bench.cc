@@ -98,7 +98,9 @@ void Baselines(const std::map<KeyframeId, KeyframeRecord>& records, int count,
                const objmap::OccupancyConfig& config, double* stock_ms, double* ray_by_ray_ms,
                double* projective_ms) {
   octomap::OcTree stock(config.resolution_m);
-  objmap::OccupancyMap ray_by_ray(config), projective(config);
+  objmap::OccupancyConfig one_thread = config;
+  one_thread.threads_per_scan = 1;
+  objmap::OccupancyMap ray_by_ray(one_thread), projective(one_thread);
   *stock_ms = *ray_by_ray_ms = *projective_ms = 0.0;
   int done = 0;
   for (const auto& [id, record] : records) {
