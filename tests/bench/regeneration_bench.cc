@@ -22,7 +22,6 @@
 #include "dataset/sequence_reader.h"
 #include "mapper/mapper.h"
 #include "occupancy/occupancy_map.h"
-#include "types/organized_cloud.h"
 
 namespace {
 
@@ -57,39 +56,10 @@ bool ReadKeyframes(const objmap::SequenceReader& reader, int count,
       std::fprintf(stderr, "regeneration_bench: %s\n", why.c_str());
       return false;
     }
-    KeyframeRecord record;
-    record.T_W_C = frame.T_W_C;
-    record.intrinsics = frame.intrinsics;
-    record.depth_mm.resize(frame.depth.depth_m.size());
-    for (std::size_t p = 0; p < record.depth_mm.size(); ++p) {
-      const float depth_m = frame.depth.depth_m[p];
-      const bool valid = std::isfinite(depth_m) && depth_m > 0.f && depth_m < 65.f;
-      record.depth_mm[p] = valid ? static_cast<std::uint16_t>(std::lround(depth_m * 1000.f)) : 0;
-    }
-    record.object_mask.assign(record.depth_mm.size(), 0);
+    KeyframeRecord record = objmap::RecordOf(frame);
     records->emplace(static_cast<KeyframeId>(i + 1), std::move(record));
   }
   return !records->empty();
-}
-
-objmap::DepthScanW ScanOf(const KeyframeRecord& record) {
-  objmap::DepthImage depth;
-  depth.width = record.intrinsics.width;
-  depth.height = record.intrinsics.height;
-  for (std::uint16_t mm : record.depth_mm) depth.depth_m.push_back(mm * 0.001f);
-  const objmap::OrganizedCloud cloud_C =
-      objmap::BackProject(depth, objmap::ColorImage{}, record.intrinsics);
-  objmap::DepthScanW scan;
-  scan.T_W_C = record.T_W_C.cast<float>();
-  scan.width = cloud_C.width;
-  scan.height = cloud_C.height;
-  scan.fx = static_cast<float>(record.intrinsics.fx);
-  scan.fy = static_cast<float>(record.intrinsics.fy);
-  scan.cx = static_cast<float>(record.intrinsics.cx);
-  scan.cy = static_cast<float>(record.intrinsics.cy);
-  scan.points_C = cloud_C.points_C;
-  scan.object_mask = record.object_mask;
-  return scan;
 }
 
 // Per-keyframe time of stock insertPointCloud and of objmap's ray-by-ray and projective
@@ -105,7 +75,7 @@ void Baselines(const std::map<KeyframeId, KeyframeRecord>& records, int count,
   int done = 0;
   for (const auto& [id, record] : records) {
     if (done == count) break;
-    const objmap::DepthScanW scan = ScanOf(record);
+    const objmap::DepthScanW scan = objmap::DepthScanOf(record);
     const objmap::ScanW points = objmap::ToScanW(scan);
     octomap::Pointcloud cloud;
     for (const Eigen::Vector3f& p : points.structure_points_W) cloud.push_back(p.x(), p.y(), p.z());

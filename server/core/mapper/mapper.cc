@@ -44,9 +44,10 @@ std::vector<Eigen::Vector3f> ToWorld(const std::vector<Eigen::Vector3f>& points_
   return points_W;
 }
 
-// The stored depth as the occupancy map's input, with the object mask; the depth image's pixel
-// grid lets the map carve free space block-wise.
-DepthScanW ToScan(const KeyframeRecord& record) {
+}  // namespace
+
+// The depth image's pixel grid lets the map carve free space block-wise.
+DepthScanW DepthScanOf(const KeyframeRecord& record) {
   DepthImage depth;
   depth.width = record.intrinsics.width;
   depth.height = record.intrinsics.height;
@@ -66,8 +67,7 @@ DepthScanW ToScan(const KeyframeRecord& record) {
   return scan;
 }
 
-KeyframeRecord MakeRecord(const RgbdFrame& frame,
-                          const std::vector<SegmentedDetection>& segmented) {
+KeyframeRecord RecordOf(const RgbdFrame& frame) {
   KeyframeRecord record;
   record.T_W_C = frame.T_W_C;
   record.intrinsics = frame.intrinsics;
@@ -78,6 +78,14 @@ KeyframeRecord MakeRecord(const RgbdFrame& frame,
     record.depth_mm[i] = valid ? static_cast<std::uint16_t>(RoundNonNegative(depth_m * 1000.f)) : 0;
   }
   record.object_mask.assign(record.depth_mm.size(), 0);
+  return record;
+}
+
+namespace {
+
+KeyframeRecord MakeRecord(const RgbdFrame& frame,
+                          const std::vector<SegmentedDetection>& segmented) {
+  KeyframeRecord record = RecordOf(frame);
   for (const SegmentedDetection& entry : segmented) {
     for (int i : entry.pixels) record.object_mask[i] = 1;
   }
@@ -339,7 +347,7 @@ bool Mapper::Impl::RestoreOccupancy(const OccupancyCheckpoint& checkpoint, int* 
   if (!restored->ReadState(checkpoint.state, why)) return false;
   *integrated = 0;
   for (auto it = keyframes.upper_bound(last); it != keyframes.end(); ++it, ++*integrated) {
-    restored->Integrate(ToScan(it->second));
+    restored->Integrate(DepthScanOf(it->second));
   }
   std::unique_lock<std::shared_mutex> lock(occupancy_mutex);
   occupancy.swap(restored);
@@ -352,7 +360,7 @@ void Mapper::Impl::RebuildOccupancy() {
   for (const auto& [id, record] : keyframes) records.push_back(&record);
   auto rebuilt = std::make_unique<OccupancyMap>(config.occupancy);
   rebuilt->IntegrateSequence(
-      records.size(), [&records](std::size_t i) { return ToScan(*records[i]); },
+      records.size(), [&records](std::size_t i) { return DepthScanOf(*records[i]); },
       config.regeneration.threads);
   std::unique_lock<std::shared_mutex> lock(occupancy_mutex);
   occupancy.swap(rebuilt);
@@ -363,7 +371,8 @@ const Eigen::AlignedBox3d& Mapper::Impl::ReachOf(KeyframeId id) {
   if (it != reach_C.end()) return it->second;
   // Two voxels: a voxel holding a point reaches one diagonal beyond it.
   const double margin_m = 2.0 * config.occupancy.resolution_m;
-  return reach_C.emplace(id, ReachInCameraFrame(ToScan(keyframes.at(id)), margin_m)).first->second;
+  return reach_C.emplace(id, ReachInCameraFrame(DepthScanOf(keyframes.at(id)), margin_m))
+      .first->second;
 }
 
 // Rebuilds the OctoMap after the keyframes in `old_poses` moved: only where their rays reach
@@ -382,7 +391,7 @@ void Mapper::Impl::RegenerateOccupancy(const std::map<KeyframeId, Eigen::Isometr
   std::vector<Eigen::AlignedBox3d> changed_reach;
   for (const auto& [id, old_pose] : old_poses) {
     const KeyframeRecord& record = keyframes.at(id);
-    changed.push_back(ToScan(record));
+    changed.push_back(DepthScanOf(record));
     changed.push_back(changed.back());
     changed.back().T_W_C = old_pose.cast<float>();
     changed_reach.push_back(ReachInWorld(ReachOf(id), record.T_W_C));
@@ -398,7 +407,7 @@ void Mapper::Impl::RegenerateOccupancy(const std::map<KeyframeId, Eigen::Isometr
   }
   auto updated = std::make_unique<OccupancyMap>(occupancy->Clone());
   updated->RegenerateWhereReached(
-      changed, reaching.size(), [&reaching](std::size_t i) { return ToScan(*reaching[i]); },
+      changed, reaching.size(), [&reaching](std::size_t i) { return DepthScanOf(*reaching[i]); },
       config.regeneration.threads);
   report->occupancy_incremental = true;
   report->keyframes_reintegrated = static_cast<int>(reaching.size());
@@ -438,7 +447,7 @@ bool Mapper::AddKeyframe(const RgbdFrame& frame, const std::vector<Detection>& d
   start = Clock::now();
   // Rays are cast without the lock (readers only read the OcTree); only writing the OcTree
   // excludes them, so an occupancy query waits at most for that last step.
-  impl_->occupancy->PrepareScan(ToScan(record));
+  impl_->occupancy->PrepareScan(DepthScanOf(record));
   {
     std::unique_lock<std::shared_mutex> lock(impl_->occupancy_mutex);
     impl_->occupancy->ApplyPreparedScan();

@@ -152,6 +152,11 @@ struct KeyframeRecord {
   std::vector<std::uint8_t> object_mask;   ///< row-major, 1: the pixel belongs to an object
 };
 
+/// A frame's depth as a keyframe keeps it (millimetres, 0 where there is none), no object pixels.
+[[nodiscard]] KeyframeRecord RecordOf(const RgbdFrame& frame);
+/// A keyframe's depth, pose and object mask as the occupancy map's input.
+[[nodiscard]] DepthScanW DepthScanOf(const KeyframeRecord& record);
+
 /// The OctoMap with the poses its keyframes were integrated with (Mapper::Restore).
 struct OccupancyCheckpoint {
   std::string state;  ///< OccupancyMap::WriteState()

@@ -1,16 +1,6 @@
 #include "occupancy/batch_octree.h"
 
 namespace objmap::occupancy_internal {
-namespace {
-
-VoxelKey ChildBase(const VoxelKey& base, unsigned int child, int half) {
-  return {static_cast<std::uint16_t>(base[0] + ((child & 1) ? half : 0)),
-          static_cast<std::uint16_t>(base[1] + ((child & 2) ? half : 0)),
-          static_cast<std::uint16_t>(base[2] + ((child & 4) ? half : 0))};
-}
-
-}  // namespace
-
 void BatchOcTree::ApplyScan(const FreeSpaceGrid& free_space,
                             const std::vector<std::uint64_t>& occupied) {
   const VoxelKey root_key = {0, 0, 0};
@@ -50,7 +40,7 @@ void BatchOcTree::Visit(octomap::OcTreeNode* node, int depth, const VoxelKey& ba
   for (unsigned int c = 0; c < 8; ++c) {
     CodeIterator child_end = child_begin;
     while (child_end != occupied_end && ((*child_end >> child_shift) & 7u) == c) ++child_end;
-    const VoxelKey child_base = ChildBase(base, c, half);
+    const VoxelKey child_base = ChildKey(base, c, half);
     const BlockState state = full ? BlockState::kFull : free_space.State(depth + 1, child_base);
     if (state != BlockState::kEmpty || child_begin != child_end) {
       const bool child_fresh = !nodeChildExists(node, c);
@@ -83,7 +73,7 @@ bool BatchOcTree::ClearVisit(octomap::OcTreeNode* node, int depth, const VoxelKe
   const int half = size / 2;
   for (unsigned int c = 0; c < 8; ++c) {
     if (!nodeChildExists(node, c)) continue;
-    if (ClearVisit(getNodeChild(node, c), depth + 1, ChildBase(base, c, half), region)) {
+    if (ClearVisit(getNodeChild(node, c), depth + 1, ChildKey(base, c, half), region)) {
       deleteNodeChild(node, c);
     }
   }

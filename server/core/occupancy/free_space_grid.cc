@@ -284,9 +284,7 @@ void FreeSpaceGrid::BuildLevel(int level) {
           StateAccumulator acc;
           const int half = 1 << (shift - 1);
           for (int c = 0; c < 8; ++c) {
-            const VoxelKey child = {static_cast<std::uint16_t>(key[0] + ((c & 1) ? half : 0)),
-                                    static_cast<std::uint16_t>(key[1] + ((c & 2) ? half : 0)),
-                                    static_cast<std::uint16_t>(key[2] + ((c & 4) ? half : 0))};
+            const VoxelKey child = ChildKey(key, static_cast<unsigned int>(c), half);
             acc.Add(State(kBrickDepth - level + 1, child));
           }
           state = acc.Result();

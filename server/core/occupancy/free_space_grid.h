@@ -28,6 +28,14 @@ using VoxelKey = std::array<std::uint16_t, 3>;
           static_cast<std::uint16_t>(packed)};
 }
 
+/// The corner key of child `child` (OctoMap's order: x -> 1, y -> 2, z -> 4) of the octree node
+/// at `base` whose children are `half` voxels a side.
+[[nodiscard]] inline VoxelKey ChildKey(const VoxelKey& base, unsigned int child, int half) {
+  return {static_cast<std::uint16_t>(base[0] + ((child & 1) ? half : 0)),
+          static_cast<std::uint16_t>(base[1] + ((child & 2) ? half : 0)),
+          static_cast<std::uint16_t>(base[2] + ((child & 4) ? half : 0))};
+}
+
 /// Morton (octree) order of a key: interleaved bits, x lowest, so that sorted codes list the
 /// voxels depth-first in OctoMap's child order (x -> 1, y -> 2, z -> 4).
 [[nodiscard]] inline std::uint64_t SpreadBitsByThree(std::uint64_t v) {

@@ -419,9 +419,7 @@ void ProjectiveCarver::MarkReached(const VoxelKey& base, int size_log2, int bloc
   }
   const int half = size / 2;
   for (int c = 0; c < 8; ++c) {
-    const VoxelKey child = {static_cast<std::uint16_t>(base[0] + ((c & 1) ? half : 0)),
-                            static_cast<std::uint16_t>(base[1] + ((c & 2) ? half : 0)),
-                            static_cast<std::uint16_t>(base[2] + ((c & 4) ? half : 0))};
+    const VoxelKey child = ChildKey(base, static_cast<unsigned int>(c), half);
     MarkReached(child, size_log2 - 1, block_log2, region);
   }
 }
@@ -471,9 +469,7 @@ void ProjectiveCarver::CarveBlock(const VoxelKey& base, int size_log2, const Fre
   }
   const int half = size / 2;
   for (int c = 0; c < 8; ++c) {
-    const VoxelKey child = {static_cast<std::uint16_t>(base[0] + ((c & 1) ? half : 0)),
-                            static_cast<std::uint16_t>(base[1] + ((c & 2) ? half : 0)),
-                            static_cast<std::uint16_t>(base[2] + ((c & 4) ? half : 0))};
+    const VoxelKey child = ChildKey(base, static_cast<unsigned int>(c), half);
     CarveBlock(child, size_log2 - 1, region, grid, stats);
   }
 }
