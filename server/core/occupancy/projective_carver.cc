@@ -27,6 +27,9 @@ constexpr float kNoRayMinRange = std::numeric_limits<float>::max();
 // their pixel rays within OccupancyMap's check, far below this).
 constexpr float kRectMarginPx = 0.05f;
 
+// Projected coordinates are clamped to this, well outside any image and within int range.
+constexpr float kFarOutsidePx = 1e7f;
+
 // floor and ceil for values within +-1e7 (projections are clamped there), without the libm
 // calls that plain SSE2 code makes for them.
 int FloorToInt(float value) {
@@ -279,8 +282,10 @@ ProjectiveCarver::Footprint ProjectiveCarver::ProjectClipped(const std::array<fl
   auto add = [&](float px, float py, float pz) {
     const float inverse_z = 1.f / pz;
     // Clamped, so that points just in front of the camera plane stay finite integers later.
-    const float u = std::clamp(camera_.fx * px * inverse_z + camera_.cx, -1e7f, 1e7f);
-    const float v = std::clamp(camera_.fy * py * inverse_z + camera_.cy, -1e7f, 1e7f);
+    const float u =
+        std::clamp(camera_.fx * px * inverse_z + camera_.cx, -kFarOutsidePx, kFarOutsidePx);
+    const float v =
+        std::clamp(camera_.fy * py * inverse_z + camera_.cy, -kFarOutsidePx, kFarOutsidePx);
     u_min = std::min(u_min, u);
     u_max = std::max(u_max, u);
     v_min = std::min(v_min, v);
@@ -307,6 +312,11 @@ ProjectiveCarver::Footprint ProjectiveCarver::ProjectClipped(const std::array<fl
 ProjectiveCarver::Footprint ProjectiveCarver::FootprintOf(float u_min, float u_max, float v_min,
                                                           float v_max, bool all_in_front) const {
   Footprint footprint;
+  // Corners just in front of the camera plane project far out; kept within int range.
+  u_min = std::clamp(u_min, -kFarOutsidePx, kFarOutsidePx);
+  u_max = std::clamp(u_max, -kFarOutsidePx, kFarOutsidePx);
+  v_min = std::clamp(v_min, -kFarOutsidePx, kFarOutsidePx);
+  v_max = std::clamp(v_max, -kFarOutsidePx, kFarOutsidePx);
   const int u0 = CeilToInt(u_min - kRectMarginPx);
   const int u1 = FloorToInt(u_max + kRectMarginPx);
   const int v0 = CeilToInt(v_min - kRectMarginPx);
@@ -538,10 +548,13 @@ void ProjectiveCarver::CarveVoxels(const VoxelKey& base, const Eigen::Vector3f& 
         // |d(fx x / z)| <= fx r (z + |x|) / (z (z - r)); the window around the nearest pixel is
         // off by up to half a pixel.
         const float to_near_side = 1.f / (center_C.z() - bounding_radius);
-        const float radius_u = camera_.fx * bounding_radius *
-                               (1.f + std::fabs(center_C.x()) * inverse_z) * to_near_side;
-        const float radius_v = camera_.fy * bounding_radius *
-                               (1.f + std::fabs(center_C.y()) * inverse_z) * to_near_side;
+        // (Clamped: near the camera plane the bound grows without limit.)
+        const float radius_u =
+            std::min(kFarOutsidePx, camera_.fx * bounding_radius *
+                                        (1.f + std::fabs(center_C.x()) * inverse_z) * to_near_side);
+        const float radius_v =
+            std::min(kFarOutsidePx, camera_.fy * bounding_radius *
+                                        (1.f + std::fabs(center_C.y()) * inverse_z) * to_near_side);
         const int bound_level =
             WindowLevelCovering(std::max(radius_u, radius_v) + 0.5f + kRectMarginPx);
         if (nearest_in_image && bound_level >= 0) {
