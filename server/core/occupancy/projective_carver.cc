@@ -271,6 +271,44 @@ ProjectiveCarver::Footprint ProjectiveCarver::ProjectCentered(const Eigen::Vecto
   return FootprintOf(u_min, u_max, v_min, v_max, /*all_in_front=*/true);
 }
 
+ProjectiveCarver::CornerOffsets ProjectiveCarver::CornerOffsetsOf(
+    const Eigen::Vector3f& half_x, const Eigen::Vector3f& half_y,
+    const Eigen::Vector3f& half_z) const {
+  CornerOffsets offsets;
+  for (std::size_t k = 0; k < 8; ++k) {
+    const Eigen::Vector3f o =
+        ((k & 1) ? half_x : -half_x) + ((k & 2) ? half_y : -half_y) + ((k & 4) ? half_z : -half_z);
+    offsets.u[k] = camera_.fx * o.x() + camera_.cx * o.z();
+    offsets.v[k] = camera_.fy * o.y() + camera_.cy * o.z();
+    offsets.z[k] = o.z();
+  }
+  offsets.z_min = *std::min_element(offsets.z.begin(), offsets.z.end());
+  return offsets;
+}
+
+// ProjectCentered() for voxels sharing their corner offsets: u = (fx x + cx z) / z at each corner
+// is the centre's numerator and denominator plus a fixed offset each.
+ProjectiveCarver::Footprint ProjectiveCarver::ProjectVoxel(const CornerOffsets& offsets,
+                                                           const Eigen::Vector3f& center,
+                                                           const Eigen::Vector3f& half_x,
+                                                           const Eigen::Vector3f& half_y,
+                                                           const Eigen::Vector3f& half_z) const {
+  if (center.z() + offsets.z_min < kNearPlaneM) {
+    return ProjectCentered(center, half_x, half_y, half_z);
+  }
+  const float center_u = camera_.fx * center.x() + camera_.cx * center.z();
+  const float center_v = camera_.fy * center.y() + camera_.cy * center.z();
+  std::array<float, 8> u, v;
+  for (std::size_t k = 0; k < 8; ++k) {
+    const float inverse_z = 1.f / (center.z() + offsets.z[k]);
+    u[k] = (center_u + offsets.u[k]) * inverse_z;
+    v[k] = (center_v + offsets.v[k]) * inverse_z;
+  }
+  return FootprintOf(*std::min_element(u.begin(), u.end()), *std::max_element(u.begin(), u.end()),
+                     *std::min_element(v.begin(), v.end()), *std::max_element(v.begin(), v.end()),
+                     /*all_in_front=*/true);
+}
+
 // Project() for a cube that reaches behind the near plane: the part in front of it, whose
 // projection is bounded by the corners in front and the points where edges cross the plane.
 ProjectiveCarver::Footprint ProjectiveCarver::ProjectClipped(const std::array<float, 8>& x,
@@ -505,6 +543,7 @@ void ProjectiveCarver::CarveVoxels(const VoxelKey& base, const Eigen::Vector3f& 
   const auto last_u = static_cast<float>(camera_.width) - 0.5f;
   const auto last_v = static_cast<float>(camera_.height) - 0.5f;
   const Eigen::Vector3f half_x = 0.5f * step_x, half_y = 0.5f * step_y, half_z = 0.5f * step_z;
+  const CornerOffsets corners = CornerOffsetsOf(half_x, half_y, half_z);
   std::uint64_t crossed = 0;  // bit i + size * (j + size * k)
   stats->voxels_tested += static_cast<std::size_t>(size) * size * size;
   for (int k = 0; k < size; ++k) {
@@ -517,14 +556,16 @@ void ProjectiveCarver::CarveVoxels(const VoxelKey& base, const Eigen::Vector3f& 
         const float distance = center_C.norm();
         const float min_distance = std::max(0.f, distance - bounding_radius);
         if (min_distance > block_max_range) continue;  // no ray of the block reaches it
-        const Eigen::Vector3f voxel_lo =
-            lo_rel_W + voxel * Eigen::Vector3f(static_cast<float>(i), static_cast<float>(j),
-                                               static_cast<float>(k));
+        auto voxel_lo = [&] {                          // only the slower paths need the corner
+          return Eigen::Vector3f(lo_rel_W.x() + voxel * static_cast<float>(i),
+                                 lo_rel_W.y() + voxel * static_cast<float>(j),
+                                 lo_rel_W.z() + voxel * static_cast<float>(k));
+        };
         if (center_C.z() <= bounding_radius + kNearPlaneM) {
           // At the camera plane: the projection needs clipping.
-          const Footprint footprint = Project(voxel_lo, voxel);
+          const Footprint footprint = Project(voxel_lo(), voxel);
           if (footprint.kind != Footprint::kOutside &&
-              VoxelCrossed(voxel_lo, footprint, min_distance)) {
+              VoxelCrossed(voxel_lo(), footprint, min_distance)) {
             crossed |= bit;
           }
           continue;
@@ -579,10 +620,10 @@ void ProjectiveCarver::CarveVoxels(const VoxelKey& base, const Eigen::Vector3f& 
             continue;
           }
         }
-        const Footprint footprint = ProjectCentered(center_C, half_x, half_y, half_z);
+        const Footprint footprint = ProjectVoxel(corners, center_C, half_x, half_y, half_z);
         if (footprint.kind == Footprint::kOutside) continue;
         if (MaxRangeOver(footprint.rect) < min_distance) continue;
-        if (VoxelCrossed(voxel_lo, footprint, min_distance)) crossed |= bit;
+        if (VoxelCrossed(voxel_lo(), footprint, min_distance)) crossed |= bit;
       }
     }
   }

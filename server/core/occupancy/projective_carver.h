@@ -88,6 +88,17 @@ class ProjectiveCarver {
                                           const Eigen::Vector3f& half_x,
                                           const Eigen::Vector3f& half_y,
                                           const Eigen::Vector3f& half_z) const;
+  // Per corner of a voxel: the offsets of fx x + cx z, fy y + cy z and z from the voxel centre's.
+  struct CornerOffsets {
+    std::array<float, 8> u, v, z;
+    float z_min;
+  };
+  [[nodiscard]] CornerOffsets CornerOffsetsOf(const Eigen::Vector3f& half_x,
+                                              const Eigen::Vector3f& half_y,
+                                              const Eigen::Vector3f& half_z) const;
+  [[nodiscard]] Footprint ProjectVoxel(const CornerOffsets& offsets, const Eigen::Vector3f& center,
+                                       const Eigen::Vector3f& half_x, const Eigen::Vector3f& half_y,
+                                       const Eigen::Vector3f& half_z) const;
   [[nodiscard]] Footprint ProjectClipped(const std::array<float, 8>& x,
                                          const std::array<float, 8>& y,
                                          const std::array<float, 8>& z) const;
