@@ -31,6 +31,29 @@ struct StateAccumulator {
 
 }  // namespace
 
+std::int64_t CoordinateToKey(double coordinate_m, double resolution_m) {
+  constexpr double kKeyCount = 1 << kTreeDepth;
+  // Clamp before the integer conversion: far-away coordinates must not overflow.
+  const double key = std::floor(coordinate_m * (1.0 / resolution_m)) + kKeyOffset;
+  return static_cast<std::int64_t>(std::clamp(key, -1.0, kKeyCount));
+}
+
+bool KeysOfBox(const Eigen::Vector3d& min_W, const Eigen::Vector3d& max_W, double resolution_m,
+               VoxelKey* lo, VoxelKey* hi) {
+  constexpr std::int64_t kKeyCount = std::int64_t{1} << kTreeDepth;
+  if (!min_W.allFinite() || !max_W.allFinite()) return false;
+  for (int i = 0; i < 3; ++i) {
+    const std::int64_t first = CoordinateToKey(min_W[i], resolution_m);
+    const std::int64_t last = CoordinateToKey(max_W[i], resolution_m);
+    if (first > last || last < 0 || first >= kKeyCount) return false;
+    (*lo)[static_cast<std::size_t>(i)] =
+        static_cast<std::uint16_t>(std::max<std::int64_t>(first, 0));
+    (*hi)[static_cast<std::size_t>(i)] =
+        static_cast<std::uint16_t>(std::min<std::int64_t>(last, kKeyCount - 1));
+  }
+  return true;
+}
+
 bool PointToKey(const Eigen::Vector3f& point, double resolution_m, VoxelKey* key) {
   const double factor = 1.0 / resolution_m;
   for (int i = 0; i < 3; ++i) {

@@ -17,6 +17,15 @@ inline constexpr int kKeyOffset = 32768;
 
 using VoxelKey = std::array<std::uint16_t, 3>;
 
+/// Leaf key of a coordinate as OcTree::coordToKey, without the range check: it may lie outside
+/// [0, 2^16) (clamped to -1 and 2^16, so that far-away coordinates cannot overflow).
+[[nodiscard]] std::int64_t CoordinateToKey(double coordinate_m, double resolution_m);
+
+/// Keys of the voxels the closed box [min_W, max_W] touches, clipped to the key range; false
+/// when none are left (or a corner is not finite).
+[[nodiscard]] bool KeysOfBox(const Eigen::Vector3d& min_W, const Eigen::Vector3d& max_W,
+                             double resolution_m, VoxelKey* lo, VoxelKey* hi);
+
 /// Same discretization as OcTree::coordToKeyChecked; false outside the key range.
 [[nodiscard]] bool PointToKey(const Eigen::Vector3f& point, double resolution_m, VoxelKey* key);
 

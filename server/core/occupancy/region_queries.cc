@@ -30,23 +30,14 @@ struct IndexBox {
   Key3 lo{}, hi{};
 };
 
-// Leaf key of a coordinate as OcTree::coordToKey, without the range check (may lie outside).
-std::int64_t CoordToKey(double coordinate_m, double resolution_m) {
-  // Clamp before the integer conversion: far-away coordinates must not overflow.
-  const double key = std::floor(coordinate_m * (1.0 / resolution_m)) + kKeyOffset;
-  return static_cast<std::int64_t>(std::clamp(key, -1.0, static_cast<double>(kKeyCount)));
-}
-
 // Leaf keys of the box [min_W, max_W] clipped to the key space; false when nothing is left.
 bool BoxKeys(const Eigen::Vector3d& min_W, const Eigen::Vector3d& max_W, double resolution_m,
              IndexBox* keys) {
-  if (!min_W.allFinite() || !max_W.allFinite()) return false;
-  for (int i = 0; i < 3; ++i) {
-    const std::int64_t lo = CoordToKey(min_W[i], resolution_m);
-    const std::int64_t hi = CoordToKey(max_W[i], resolution_m);
-    if (lo > hi || hi < 0 || lo >= kKeyCount) return false;
-    keys->lo[i] = std::max<std::int64_t>(lo, 0);
-    keys->hi[i] = std::min<std::int64_t>(hi, kKeyCount - 1);
+  occupancy_internal::VoxelKey lo{}, hi{};
+  if (!occupancy_internal::KeysOfBox(min_W, max_W, resolution_m, &lo, &hi)) return false;
+  for (std::size_t i = 0; i < 3; ++i) {
+    keys->lo[i] = lo[i];
+    keys->hi[i] = hi[i];
   }
   return true;
 }
@@ -167,7 +158,7 @@ struct RayWalk {
 bool StartWalk(const Eigen::Vector3d& origin_W, const Eigen::Vector3d& unit_W, double resolution_m,
                RayWalk* walk) {
   for (int i = 0; i < 3; ++i) {
-    walk->key[i] = CoordToKey(origin_W[i], resolution_m);
+    walk->key[i] = occupancy_internal::CoordinateToKey(origin_W[i], resolution_m);
     if (walk->key[i] < 0 || walk->key[i] >= kKeyCount) return false;
     walk->step[i] = unit_W[i] > 0.0 ? 1 : (unit_W[i] < 0.0 ? -1 : 0);
     if (walk->step[i] == 0) {

@@ -208,7 +208,9 @@ void ScanPreparer::SortOccupied() {
                        occupied_keys_.end());
 }
 
-void ScanPreparer::Prepare(const ScanW& scan) {
+void ScanPreparer::Prepare(const ScanW& scan) { PrepareRayByRay(scan, nullptr); }
+
+void ScanPreparer::PrepareRayByRay(const ScanW& scan, const FreeSpaceGrid* region) {
   stats_ = IntegrationStats{};
   ready_ = false;
   VoxelKey origin_key;
@@ -219,32 +221,25 @@ void ScanPreparer::Prepare(const ScanW& scan) {
   const Clock::time_point start = Clock::now();
   CollectRays(scan);
   CastRays(scan.origin_W, origin_key);
+  if (region != nullptr) DropOutside(*region);
   Finish(start, ray_ends_W_.size());
 }
 
 void ScanPreparer::Prepare(const DepthScanW& scan, const FreeSpaceGrid* region) {
+  if (!CollectPixelRays(scan)) {
+    PrepareRayByRay(ToScanW(scan), region);
+    return;
+  }
   stats_ = IntegrationStats{};
   ready_ = false;
   const Clock::time_point start = Clock::now();
-  if (!CollectPixelRays(scan)) {
-    Prepare(ToScanW(scan));
-    if (ready_ && region != nullptr) KeepOnly(*region);
-    return;
-  }
   carver_.KeyBox(&min_key_, &max_key_);
   grid_.Reset(min_key_, max_key_);
   const CarvingStats carving = carver_.Carve(&grid_, region, threads_);
   stats_.projective = true;
   stats_.blocks_decided = carving.blocks_decided;
   stats_.voxels_tested = carving.voxels_tested;
-  if (region != nullptr) {
-    occupied_keys_.erase(std::remove_if(occupied_keys_.begin(), occupied_keys_.end(),
-                                        [region](std::uint64_t code) {
-                                          return !region->Test(KeyOfMortonCode(code));
-                                        }),
-                         occupied_keys_.end());
-    grid_.KeepOnly(*region);
-  }
+  if (region != nullptr) DropOutside(*region);
   Finish(start, carver_.rays());
 }
 
@@ -274,13 +269,12 @@ void ScanPreparer::MarkReach(const DepthScanW& scan, int block_log2, FreeSpaceGr
   mark_occupied();
 }
 
-void ScanPreparer::KeepOnly(const FreeSpaceGrid& region) {
+void ScanPreparer::DropOutside(const FreeSpaceGrid& region) {
   occupied_keys_.erase(
       std::remove_if(occupied_keys_.begin(), occupied_keys_.end(),
                      [&region](std::uint64_t code) { return !region.Test(KeyOfMortonCode(code)); }),
       occupied_keys_.end());
   grid_.KeepOnly(region);
-  grid_.BuildPyramid();
 }
 
 void ScanPreparer::Finish(Clock::time_point start, std::size_t rays) {

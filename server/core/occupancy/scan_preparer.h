@@ -39,8 +39,6 @@ class ScanPreparer {
   /// A scan is prepared (and not yet applied).
   [[nodiscard]] bool ready() const { return ready_; }
   void MarkApplied() { ready_ = false; }
-  /// Drops the updates outside `region` (for regenerating only part of a map).
-  void KeepOnly(const FreeSpaceGrid& region);
   [[nodiscard]] const FreeSpaceGrid& free_space() const { return grid_; }
   /// Morton codes, sorted and distinct; none of them is set in free_space().
   [[nodiscard]] const std::vector<std::uint64_t>& occupied() const { return occupied_keys_; }
@@ -57,6 +55,9 @@ class ScanPreparer {
   };
   [[nodiscard]] PointRay RayOf(const Eigen::Vector3f& origin, const Eigen::Vector3f& point_W,
                                bool is_object) const;
+  void PrepareRayByRay(const ScanW& scan, const FreeSpaceGrid* region);
+  // Drops the updates outside `region` (for regenerating only part of a map).
+  void DropOutside(const FreeSpaceGrid& region);
   void CollectRays(const ScanW& scan);
   void KeepOneRayPerEndVoxel();
   void CastRays(const Eigen::Vector3f& origin, const VoxelKey& origin_key);

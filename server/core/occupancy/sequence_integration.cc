@@ -22,20 +22,6 @@ using occupancy_internal::VoxelKey;
 // be marked quickly from the image, fine enough to leave most of a room alone.
 constexpr int kRegionBlockLog2 = 4;
 
-// Keys of the voxels a world box touches, clipped to the key range; false when none.
-bool KeysOf(const Eigen::AlignedBox3d& box_W, double resolution_m, VoxelKey* lo, VoxelKey* hi) {
-  if (box_W.isEmpty() || !box_W.min().allFinite() || !box_W.max().allFinite()) return false;
-  constexpr double kFirst = 0.0, kLast = 65535.0;
-  for (int a = 0; a < 3; ++a) {
-    const double first = std::floor(box_W.min()[a] / resolution_m) + 32768.0;
-    const double last = std::floor(box_W.max()[a] / resolution_m) + 32768.0;
-    if (last < kFirst || first > kLast) return false;
-    (*lo)[static_cast<std::size_t>(a)] = static_cast<std::uint16_t>(std::max(first, kFirst));
-    (*hi)[static_cast<std::size_t>(a)] = static_cast<std::uint16_t>(std::min(last, kLast));
-  }
-  return true;
-}
-
 }  // namespace
 
 Eigen::AlignedBox3d ReachInCameraFrame(const DepthScanW& scan, double margin_m) {
@@ -123,7 +109,10 @@ std::size_t OccupancyMap::RegenerateWhereReached(
         ReachInWorld(ReachInCameraFrame(scan, 2.0 * resolution_m), scan.T_W_C.cast<double>()));
   }
   VoxelKey lo{}, hi{};
-  if (!KeysOf(bounds_W, resolution_m, &lo, &hi)) return 0;
+  // (An empty box has min > max: no keys.)
+  if (!occupancy_internal::KeysOfBox(bounds_W.min(), bounds_W.max(), resolution_m, &lo, &hi)) {
+    return 0;
+  }
   FreeSpaceGrid region(resolution_m);
   region.Reset(lo, hi);
   ScanPreparer marker(impl_->config);
