@@ -1,5 +1,6 @@
 #pragma once
-// Private to server_config.cc: the list of sections and keys of objmap_server's YAML file.
+// The list of sections and keys of objmap_server's YAML file, walked by its reader and writer
+// (server_config.cc) and by objmap_node's ROS-parameter reader (server/ros_node/node_config.cc).
 
 #include "server_config.h"
 

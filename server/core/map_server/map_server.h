@@ -228,6 +228,12 @@ class MapServer {
                                            std::string* bytes, std::size_t* leaf_count,
                                            std::uint64_t* version) const;
 
+  /// Centres of the occupied voxels at the map resolution, at most `max_count` of them (a
+  /// larger map is thinned evenly, every k-th voxel): what a visualisation publishes.
+  [[nodiscard]] ServiceStatus OccupiedCenters(std::size_t max_count,
+                                              std::vector<Eigen::Vector3d>* centers,
+                                              std::uint64_t* version) const;
+
   /// Stored keyframes with id >= `first_id`, ascending, at most `max_count` (0: all), with their
   /// current poses: what a pose-graph back end needs to resume after a restart. `version` is the
   /// map version before the read; every keyframe of that version is listed (later ones may be).

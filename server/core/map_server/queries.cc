@@ -251,6 +251,22 @@ ServiceStatus MapServer::OctomapBytes(
   return ServiceStatus::Ok();
 }
 
+ServiceStatus MapServer::OccupiedCenters(std::size_t max_count,
+                                         std::vector<Eigen::Vector3d>* centers,
+                                         std::uint64_t* version) const {
+  if (max_count == 0) return ServiceStatus::Invalid("max_count must be positive");
+  *version = impl_->Current()->version;
+  impl_->mapper->ReadOccupancy(
+      [&](const OccupancyMap& map) { *centers = map.OccupiedVoxelCenters(); });
+  if (centers->size() > max_count) {
+    const std::size_t stride = (centers->size() + max_count - 1) / max_count;
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < centers->size(); i += stride) (*centers)[kept++] = (*centers)[i];
+    centers->resize(kept);
+  }
+  return ServiceStatus::Ok();
+}
+
 ServiceStatus MapServer::ListKeyframes(KeyframeId first_id, std::size_t max_count,
                                        std::vector<KeyframeSummary>* keyframes,
                                        std::uint64_t* version) const {

@@ -1,0 +1,59 @@
+// objmap_node: the object map as a ROS1 node. Parameters: launch/objmap.launch and
+// server/apps/objmap.example.yaml; topics and services: docs/ros.md.
+#include <ros/ros.h>
+
+#include <filesystem>
+
+#include "detection/centernet_detector.h"
+#include "map_node.h"
+#include "map_server/map_server.h"
+#include "node_config.h"
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "objmap_node");
+  ros::NodeHandle node;
+  ros::NodeHandle private_node("~");
+
+  objmap::ros_node::NodeConfig config;
+  config.server.detector.model_path = OBJMAP_DEFAULT_MODEL_PATH;
+  std::string why;
+  if (!objmap::ros_node::LoadNodeConfig(private_node, &config, &why)) {
+    ROS_FATAL_STREAM("objmap_node: bad parameters: " << why);
+    return 2;
+  }
+  std::unique_ptr<objmap::Detector> detector;
+  if (config.detections_topic.empty() && config.run_detector) {
+    if (!std::filesystem::exists(config.server.detector.model_path)) {
+      ROS_FATAL_STREAM("objmap_node: detector model " << config.server.detector.model_path
+                                                      << " not found: run `bash scripts/setup.sh`, "
+                                                         "set ~detector/model_path, or set "
+                                                         "~run_detector false");
+      return 2;
+    }
+    detector = objmap::MakeCenterNetDetector(config.server.detector, &why);
+    if (!detector) {
+      ROS_FATAL_STREAM("objmap_node: detector: " << why);
+      return 2;
+    }
+  }
+  std::shared_ptr<objmap::MapServer> server =
+      objmap::MapServer::Open(config.server.map_server, config.database, std::move(detector), &why);
+  if (!server) {
+    ROS_FATAL_STREAM("objmap_node: map database " << config.database << ": " << why);
+    return 2;
+  }
+  // Services on the global queue, two at a time (a regeneration waited for must not block
+  // status calls); frames have their own queue and thread inside MapNode.
+  ros::AsyncSpinner spinner(2);
+  spinner.start();
+  {
+    objmap::ros_node::MapNode map_node(node, private_node, config, server);
+    const objmap::ServerStatus status = server->Status();
+    ROS_INFO_STREAM("objmap_node: serving " << config.database << " (" << status.keyframes
+                                            << " keyframes, " << status.objects
+                                            << " objects) in frame " << config.world_frame);
+    ros::waitForShutdown();
+  }
+  server->Shutdown();
+  return 0;
+}

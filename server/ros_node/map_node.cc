@@ -1,0 +1,200 @@
+#include "map_node.h"
+
+#include <tf2/exceptions.h>
+
+#include <iomanip>
+#include <sstream>
+
+#include "map_node_impl.h"
+#include "ros_conversions.h"
+
+namespace objmap::ros_node {
+namespace {
+
+// Recent poses kept from the pose topic, to pair with frames by stamp.
+constexpr std::size_t kMaxRecentPoses = 1000;
+
+std::string StampText(const ros::Time& stamp) {
+  std::ostringstream text;
+  text << std::fixed << std::setprecision(3) << stamp.toSec();
+  return text.str();
+}
+
+}  // namespace
+
+MapNode::Impl::Impl(const ros::NodeHandle& node_in, const ros::NodeHandle& private_node_in,
+                    const NodeConfig& config_in, std::shared_ptr<MapServer> server_in)
+    : node(node_in),
+      private_node(private_node_in),
+      config(config_in),
+      server(std::move(server_in)),
+      keyframe_selector(config_in.keyframes) {}
+
+MapNode::MapNode(const ros::NodeHandle& node, const ros::NodeHandle& private_node,
+                 const NodeConfig& config, std::shared_ptr<MapServer> server)
+    : impl_(std::make_unique<Impl>(node, private_node, config, std::move(server))) {
+  impl_->AdvertiseTopics();
+  impl_->AdvertiseServices();
+  impl_->SubscribeInputs();
+  impl_->publisher_thread = std::thread([impl = impl_.get()] { impl->PublishChangesLoop(); });
+}
+
+MapNode::~MapNode() {
+  impl_->stopping = true;
+  impl_->frame_spinner->stop();
+  impl_->pose_arrived.notify_all();
+  if (impl_->publisher_thread.joinable()) impl_->publisher_thread.join();
+}
+
+void MapNode::Impl::SubscribeInputs() {
+  // The input subscribers deliver on frame_queue, so a keyframe being mapped (hundreds of ms)
+  // blocks only the frames behind it, never the services.
+  ros::NodeHandle input_node(node);
+  input_node.setCallbackQueue(&frame_queue);
+  const auto queue = static_cast<std::uint32_t>(config.sync_queue_size);
+  color_sub.subscribe(input_node, "rgb/image", queue);
+  depth_sub.subscribe(input_node, "depth/image", queue);
+  info_sub.subscribe(input_node, "rgb/camera_info", queue);
+  const ros::Duration max_interval(config.sync_max_interval_s);
+  if (config.detections_topic.empty()) {
+    image_sync = std::make_unique<message_filters::Synchronizer<ImageSync>>(
+        ImageSync(config.sync_queue_size), color_sub, depth_sub, info_sub);
+    image_sync->setMaxIntervalDuration(max_interval);
+    image_sync->registerCallback(&MapNode::Impl::OnImages, this);
+  } else {
+    detections_sub.subscribe(input_node, config.detections_topic, queue);
+    image_detection_sync = std::make_unique<message_filters::Synchronizer<ImageDetectionSync>>(
+        ImageDetectionSync(config.sync_queue_size), color_sub, depth_sub, info_sub, detections_sub);
+    image_detection_sync->setMaxIntervalDuration(max_interval);
+    image_detection_sync->registerCallback(&MapNode::Impl::OnFrame, this);
+  }
+  if (!config.pose_topic.empty()) {
+    // Poses arrive on the global queue: a frame waiting for its pose on frame_queue must not
+    // hold back the pose it waits for.
+    pose_sub = node.subscribe(config.pose_topic, 100, &MapNode::Impl::OnPose, this);
+  } else {
+    tf_listener = std::make_unique<tf2_ros::TransformListener>(tf_buffer, node);
+  }
+  frame_spinner = std::make_unique<ros::AsyncSpinner>(1, &frame_queue);
+  frame_spinner->start();
+}
+
+void MapNode::Impl::OnImages(const sensor_msgs::ImageConstPtr& color,
+                             const sensor_msgs::ImageConstPtr& depth,
+                             const sensor_msgs::CameraInfoConstPtr& info) {
+  OnFrame(color, depth, info, nullptr);
+}
+
+void MapNode::Impl::OnPose(const geometry_msgs::PoseStampedConstPtr& pose) {
+  {
+    std::lock_guard<std::mutex> lock(pose_mutex);
+    recent_poses.push_back(*pose);
+    if (recent_poses.size() > kMaxRecentPoses) recent_poses.pop_front();
+  }
+  pose_arrived.notify_all();
+}
+
+bool MapNode::Impl::PoseFromTopic(const ros::Time& stamp, Eigen::Isometry3d* T_W_C,
+                                  std::string* why) {
+  const ros::Duration tolerance(config.sync_max_interval_s);
+  std::unique_lock<std::mutex> lock(pose_mutex);
+  const geometry_msgs::PoseStamped* best = nullptr;
+  // Waits until a pose within the tolerance arrived, or one after it (then none will come).
+  const auto settled = [&] {
+    best = nullptr;
+    for (const auto& pose : recent_poses) {
+      const ros::Duration gap = pose.header.stamp - stamp;
+      if (std::abs(gap.toSec()) <= tolerance.toSec() &&
+          (best == nullptr ||
+           std::abs(gap.toSec()) < std::abs((best->header.stamp - stamp).toSec()))) {
+        best = &pose;
+      }
+    }
+    return stopping || best != nullptr ||
+           (!recent_poses.empty() && recent_poses.back().header.stamp > stamp + tolerance);
+  };
+  pose_arrived.wait_for(lock, std::chrono::duration<double>(config.pose_timeout_s), settled);
+  if (best == nullptr) {
+    *why = "no pose on " + config.pose_topic + " within " +
+           std::to_string(config.sync_max_interval_s) + " s of t=" + StampText(stamp);
+    return false;
+  }
+  return ros_bridge::PoseFromMsg(best->pose, config.pose_topic + " pose", T_W_C, why);
+}
+
+bool MapNode::Impl::CameraPose(const sensor_msgs::Image& color, Eigen::Isometry3d* T_W_C,
+                               std::string* why) {
+  const ros::Time stamp = color.header.stamp;
+  if (!config.pose_topic.empty()) return PoseFromTopic(stamp, T_W_C, why);
+  const std::string camera_frame =
+      config.camera_frame.empty() ? color.header.frame_id : config.camera_frame;
+  if (camera_frame.empty()) {
+    *why = "the colour image has no header.frame_id and ~camera_frame is not set";
+    return false;
+  }
+  try {
+    const geometry_msgs::TransformStamped transform = tf_buffer.lookupTransform(
+        config.world_frame, camera_frame, stamp, ros::Duration(config.pose_timeout_s));
+    return ros_bridge::TransformFromMsg(
+        transform.transform, "TF " + config.world_frame + " <- " + camera_frame, T_W_C, why);
+  } catch (const tf2::TransformException& e) {
+    *why = "no transform from '" + camera_frame + "' to '" + config.world_frame +
+           "' at t=" + StampText(stamp) + ": " + e.what();
+    return false;
+  }
+}
+
+void MapNode::Impl::Reject(const ros::Time& stamp, const std::string& why) {
+  ++frames_rejected;
+  const std::string message = "frame at t=" + StampText(stamp) + " rejected: " + why;
+  ROS_WARN_STREAM("objmap_node: " << message);
+  std::lock_guard<std::mutex> lock(rejection_mutex);
+  last_rejection = message;
+}
+
+void MapNode::Impl::OnFrame(const sensor_msgs::ImageConstPtr& color,
+                            const sensor_msgs::ImageConstPtr& depth,
+                            const sensor_msgs::CameraInfoConstPtr& info,
+                            const objmap_msgs::DetectionArrayConstPtr& detections) {
+  // Counted once handled, whatever the outcome: a player that waits for its frame to be taken
+  // in watches this count.
+  struct CountWhenDone {
+    std::atomic<long long>& count;
+    ~CountWhenDone() { ++count; }
+  } count_when_done{frames_received};
+  if (stopping) return;
+  const ros::Time stamp = color->header.stamp;
+  std::string why;
+  Eigen::Isometry3d T_W_C;
+  if (!CameraPose(*color, &T_W_C, &why)) return Reject(stamp, why);
+  RgbdFrame frame;
+  if (!ros_bridge::FrameFromMsgs(*color, *depth, *info, T_W_C, config.depth_scale, &frame, &why)) {
+    return Reject(stamp, why);
+  }
+  frame.frame_index = frames_received.load();
+  frame.name = "frame at t=" + StampText(stamp);
+  std::optional<std::vector<Detection>> given;
+  if (detections) {
+    given.emplace();
+    for (std::size_t i = 0; i < detections->detections.size(); ++i) {
+      Detection detection;
+      if (!ros_bridge::DetectionFromMsg(detections->detections[i],
+                                        "detections[" + std::to_string(i) + "]", &detection,
+                                        &why)) {
+        return Reject(stamp, why);
+      }
+      given->push_back(detection);
+    }
+  } else if (!config.run_detector) {
+    given.emplace();  // structure only
+  }
+  if (!keyframe_selector.IsKeyframe(frame.T_W_C)) return;
+  AddKeyframeOutcome outcome;
+  const ServiceStatus status = server->AddKeyframe(std::move(frame), std::move(given), &outcome);
+  if (!status.ok()) return Reject(stamp, "the map server refused it: " + status.message);
+  ++keyframes_sent;
+  ROS_DEBUG_STREAM("objmap_node: keyframe " << outcome.keyframe_id << " from t=" << StampText(stamp)
+                                            << ", map version " << outcome.map_version);
+}
+
+}  // namespace objmap::ros_node

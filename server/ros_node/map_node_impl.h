@@ -1,0 +1,124 @@
+#pragma once
+// Private to server/ros_node: the state shared by the frame input (map_node.cc), the services
+// (node_services.cc) and the publishers (node_publishers.cc).
+
+#include <geometry_msgs/PoseStamped.h>
+#include <message_filters/subscriber.h>
+#include <message_filters/sync_policies/approximate_time.h>
+#include <message_filters/synchronizer.h>
+#include <objmap_msgs/DetectionArray.h>
+#include <objmap_msgs/GetObject.h>
+#include <objmap_msgs/GetOctomap.h>
+#include <objmap_msgs/Inventory.h>
+#include <objmap_msgs/IsFree.h>
+#include <objmap_msgs/QueryObjects.h>
+#include <objmap_msgs/QueryOccupancy.h>
+#include <objmap_msgs/RayCast.h>
+#include <objmap_msgs/Status.h>
+#include <objmap_msgs/UpdatePoses.h>
+#include <ros/callback_queue.h>
+#include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <thread>
+
+#include "dataset/keyframe_selector.h"
+#include "map_node.h"
+#include "map_server/map_server.h"
+
+namespace objmap::ros_node {
+
+using ImageSync =
+    message_filters::sync_policies::ApproximateTime<sensor_msgs::Image, sensor_msgs::Image,
+                                                    sensor_msgs::CameraInfo>;
+using ImageDetectionSync = message_filters::sync_policies::ApproximateTime<
+    sensor_msgs::Image, sensor_msgs::Image, sensor_msgs::CameraInfo, objmap_msgs::DetectionArray>;
+
+struct MapNode::Impl {
+  Impl(const ros::NodeHandle& node_in, const ros::NodeHandle& private_node_in,
+       const NodeConfig& config_in, std::shared_ptr<MapServer> server_in);
+
+  // --- input (map_node.cc)
+  void SubscribeInputs();
+  /// Synchronised inputs: without and with a detections topic.
+  void OnImages(const sensor_msgs::ImageConstPtr& color, const sensor_msgs::ImageConstPtr& depth,
+                const sensor_msgs::CameraInfoConstPtr& info);
+  void OnFrame(const sensor_msgs::ImageConstPtr& color, const sensor_msgs::ImageConstPtr& depth,
+               const sensor_msgs::CameraInfoConstPtr& info,
+               const objmap_msgs::DetectionArrayConstPtr& detections);
+  void OnPose(const geometry_msgs::PoseStampedConstPtr& pose);
+  bool CameraPose(const sensor_msgs::Image& color, Eigen::Isometry3d* T_W_C, std::string* why);
+  bool PoseFromTopic(const ros::Time& stamp, Eigen::Isometry3d* T_W_C, std::string* why);
+  void Reject(const ros::Time& stamp, const std::string& why);
+
+  // --- services (node_services.cc)
+  void AdvertiseServices();
+  bool QueryObjects(objmap_msgs::QueryObjects::Request& request,
+                    objmap_msgs::QueryObjects::Response& response);
+  bool GetObject(objmap_msgs::GetObject::Request& request,
+                 objmap_msgs::GetObject::Response& response);
+  bool Inventory(objmap_msgs::Inventory::Request& request,
+                 objmap_msgs::Inventory::Response& response);
+  bool QueryOccupancy(objmap_msgs::QueryOccupancy::Request& request,
+                      objmap_msgs::QueryOccupancy::Response& response);
+  bool IsFree(objmap_msgs::IsFree::Request& request, objmap_msgs::IsFree::Response& response);
+  bool RayCast(objmap_msgs::RayCast::Request& request, objmap_msgs::RayCast::Response& response);
+  bool GetOctomap(objmap_msgs::GetOctomap::Request& request,
+                  objmap_msgs::GetOctomap::Response& response);
+  bool UpdatePoses(objmap_msgs::UpdatePoses::Request& request,
+                   objmap_msgs::UpdatePoses::Response& response);
+  bool Status(objmap_msgs::Status::Request& request, objmap_msgs::Status::Response& response);
+
+  // --- publishers (node_publishers.cc)
+  void AdvertiseTopics();
+  /// Publishes every map change (and markers, occupied cells) until `stopping`.
+  void PublishChangesLoop();
+  void PublishMarkers(const MapSnapshot& snapshot);
+  void PublishOccupiedCells();
+
+  ros::NodeHandle node;
+  ros::NodeHandle private_node;
+  NodeConfig config;
+  std::shared_ptr<MapServer> server;
+
+  // Frames arrive on their own queue and thread, in order.
+  ros::CallbackQueue frame_queue;
+  std::unique_ptr<ros::AsyncSpinner> frame_spinner;
+  tf2_ros::Buffer tf_buffer;
+  std::unique_ptr<tf2_ros::TransformListener> tf_listener;
+  message_filters::Subscriber<sensor_msgs::Image> color_sub;
+  message_filters::Subscriber<sensor_msgs::Image> depth_sub;
+  message_filters::Subscriber<sensor_msgs::CameraInfo> info_sub;
+  message_filters::Subscriber<objmap_msgs::DetectionArray> detections_sub;
+  std::unique_ptr<message_filters::Synchronizer<ImageSync>> image_sync;
+  std::unique_ptr<message_filters::Synchronizer<ImageDetectionSync>> image_detection_sync;
+  ros::Subscriber pose_sub;
+  KeyframeSelector keyframe_selector;
+
+  std::mutex pose_mutex;
+  std::condition_variable pose_arrived;
+  std::deque<geometry_msgs::PoseStamped> recent_poses;  // newest last
+
+  std::atomic<long long> frames_received{0};
+  std::atomic<long long> frames_rejected{0};
+  std::atomic<long long> keyframes_sent{0};
+  mutable std::mutex rejection_mutex;
+  std::string last_rejection;
+
+  std::vector<ros::ServiceServer> services;
+  ros::Publisher markers_pub;
+  ros::Publisher occupied_pub;
+  ros::Publisher object_cloud_pub;
+  ros::Publisher changes_pub;
+  std::atomic<bool> stopping{false};
+  std::thread publisher_thread;
+};
+
+}  // namespace objmap::ros_node

@@ -1,0 +1,73 @@
+#pragma once
+// objmap_node's parameters: every ROS parameter it reads is translated into a config struct
+// here, in one place, and validated before the node starts.
+
+#include <string>
+
+#include "dataset/keyframe_selector.h"
+#include "server_config.h"
+
+namespace ros {
+class NodeHandle;
+}
+
+namespace objmap::ros_node {
+
+/// What the node publishes besides answering services.
+struct PublishConfig {
+  /// Object markers (boxes coloured by class, labels) on ~objects after every map change.
+  bool markers = true;
+  /// Occupied voxel centres on ~occupied_cells every this many keyframes (and after every
+  /// regeneration); 0: never.
+  int occupied_every_keyframes = 5;
+  /// Most points one ~occupied_cells cloud carries (a large map is thinned evenly).
+  int occupied_max_points = 2000000;
+
+  [[nodiscard]] bool IsValid(std::string* why) const;
+};
+
+/// Everything objmap_node reads at start. Parameters live in the node's private namespace:
+/// the keys below at the top level, and the map server's sections (server, store, mapper,
+/// segmenter, ..., detector: the objmap_server YAML layout, server/apps/objmap.example.yaml) as
+/// `~section/key`, so that `rosparam load objmap.example.yaml ~` configures both alike.
+struct NodeConfig {
+  /// The map server's configuration (sections of objmap_server's YAML file).
+  ServerConfig server;
+  /// SQLite file of the map; opened (and the map restored) at start, created when absent.
+  std::string database = "objmap.db";
+  /// Frame of the map: poses T_W_C are the transform from the camera's frame into this one.
+  std::string world_frame = "map";
+  /// Camera frame for the TF lookup; empty: the colour image's header.frame_id.
+  std::string camera_frame;
+  /// geometry_msgs/PoseStamped topic with T_W_C instead of TF; empty: TF.
+  std::string pose_topic;
+  /// objmap_msgs/DetectionArray topic from the robot's own detector, paired with the images by
+  /// stamp; empty: the node runs its detector (or none, see run_detector).
+  std::string detections_topic;
+  /// Without a detections topic: run the CenterNet detector of section `detector` (true) or map
+  /// structure only, without objects (false).
+  bool run_detector = true;
+  /// Metres per unit of 16UC1 depth images (0.001: millimetres, as OpenNI2 drivers publish).
+  double depth_scale = 0.001;
+  /// Colour, depth, camera info (and detections) are paired by approximate time: at most this
+  /// far apart, in seconds; the subscribers keep this many messages.
+  double sync_max_interval_s = 0.02;
+  int sync_queue_size = 10;
+  /// How long a frame waits for its camera pose (TF or pose topic) before it is rejected.
+  double pose_timeout_s = 0.5;
+  /// Keyframes among the frames received (section `keyframes`).
+  KeyframeSelectorConfig keyframes;
+  /// Section `publish`.
+  PublishConfig publish;
+
+  [[nodiscard]] bool IsValid(std::string* why) const;
+};
+
+/// Reads the node's parameters over `config` (defaults for those not set) from `private_node`'s
+/// namespace. False with a reason naming the parameter ("~mapper/min_detection_score: expected
+/// a number, got 'high'") for values of the wrong type and for parameters the node does not know
+/// (a misspelt key is an error, not a silent default); then IsValid.
+[[nodiscard]] bool LoadNodeConfig(const ros::NodeHandle& private_node, NodeConfig* config,
+                                  std::string* why);
+
+}  // namespace objmap::ros_node
