@@ -14,6 +14,12 @@ namespace {
 // Recent poses kept from the pose topic, to pair with frames by stamp.
 constexpr std::size_t kMaxRecentPoses = 1000;
 
+template <typename Policy>
+struct IsApproximateTime : std::false_type {};
+template <typename... Messages>
+struct IsApproximateTime<message_filters::sync_policies::ApproximateTime<Messages...>>
+    : std::true_type {};
+
 std::string StampText(const ros::Time& stamp) {
   std::ostringstream text;
   text << std::fixed << std::setprecision(3) << stamp.toSec();
@@ -55,18 +61,24 @@ void MapNode::Impl::SubscribeInputs() {
   color_sub.subscribe(input_node, "rgb/image", queue);
   depth_sub.subscribe(input_node, "depth/image", queue);
   info_sub.subscribe(input_node, "rgb/camera_info", queue);
-  const ros::Duration max_interval(config.sync_max_interval_s);
+  using message_filters::sync_policies::ApproximateTime;
+  using message_filters::sync_policies::ExactTime;
+  using sensor_msgs::CameraInfo;
+  using sensor_msgs::Image;
+  const bool exact = config.sync_max_interval_s == 0.0;
   if (config.detections_topic.empty()) {
-    image_sync = std::make_unique<message_filters::Synchronizer<ImageSync>>(
-        ImageSync(config.sync_queue_size), color_sub, depth_sub, info_sub);
-    image_sync->setMaxIntervalDuration(max_interval);
-    image_sync->registerCallback(&MapNode::Impl::OnImages, this);
+    synchronizer = exact ? Synchronize<ExactTime<Image, Image, CameraInfo>>(
+                               &MapNode::Impl::OnImages, color_sub, depth_sub, info_sub)
+                         : Synchronize<ApproximateTime<Image, Image, CameraInfo>>(
+                               &MapNode::Impl::OnImages, color_sub, depth_sub, info_sub);
   } else {
+    using objmap_msgs::DetectionArray;
     detections_sub.subscribe(input_node, config.detections_topic, queue);
-    image_detection_sync = std::make_unique<message_filters::Synchronizer<ImageDetectionSync>>(
-        ImageDetectionSync(config.sync_queue_size), color_sub, depth_sub, info_sub, detections_sub);
-    image_detection_sync->setMaxIntervalDuration(max_interval);
-    image_detection_sync->registerCallback(&MapNode::Impl::OnFrame, this);
+    synchronizer =
+        exact ? Synchronize<ExactTime<Image, Image, CameraInfo, DetectionArray>>(
+                    &MapNode::Impl::OnFrame, color_sub, depth_sub, info_sub, detections_sub)
+              : Synchronize<ApproximateTime<Image, Image, CameraInfo, DetectionArray>>(
+                    &MapNode::Impl::OnFrame, color_sub, depth_sub, info_sub, detections_sub);
   }
   if (!config.pose_topic.empty()) {
     // Poses arrive on the global queue: a frame waiting for its pose on frame_queue must not
@@ -77,6 +89,17 @@ void MapNode::Impl::SubscribeInputs() {
   }
   frame_spinner = std::make_unique<ros::AsyncSpinner>(1, &frame_queue);
   frame_spinner->start();
+}
+
+template <typename Policy, typename Callback, typename... Subscribers>
+std::shared_ptr<void> MapNode::Impl::Synchronize(Callback callback, Subscribers&... subscribers) {
+  auto synchronizer = std::make_shared<message_filters::Synchronizer<Policy>>(
+      Policy(static_cast<std::uint32_t>(config.sync_queue_size)), subscribers...);
+  if constexpr (IsApproximateTime<Policy>::value) {
+    synchronizer->setMaxIntervalDuration(ros::Duration(config.sync_max_interval_s));
+  }
+  synchronizer->registerCallback(callback, this);
+  return synchronizer;
 }
 
 void MapNode::Impl::OnImages(const sensor_msgs::ImageConstPtr& color,

@@ -5,6 +5,7 @@
 #include <geometry_msgs/PoseStamped.h>
 #include <message_filters/subscriber.h>
 #include <message_filters/sync_policies/approximate_time.h>
+#include <message_filters/sync_policies/exact_time.h>
 #include <message_filters/synchronizer.h>
 #include <objmap_msgs/DetectionArray.h>
 #include <objmap_msgs/GetObject.h>
@@ -47,6 +48,9 @@ struct MapNode::Impl {
 
   // --- input (map_node.cc)
   void SubscribeInputs();
+  /// A synchronizer of `Policy` over the subscribers, calling `callback` on this.
+  template <typename Policy, typename Callback, typename... Subscribers>
+  std::shared_ptr<void> Synchronize(Callback callback, Subscribers&... subscribers);
   /// Synchronised inputs: without and with a detections topic.
   void OnImages(const sensor_msgs::ImageConstPtr& color, const sensor_msgs::ImageConstPtr& depth,
                 const sensor_msgs::CameraInfoConstPtr& info);
@@ -97,8 +101,9 @@ struct MapNode::Impl {
   message_filters::Subscriber<sensor_msgs::Image> depth_sub;
   message_filters::Subscriber<sensor_msgs::CameraInfo> info_sub;
   message_filters::Subscriber<objmap_msgs::DetectionArray> detections_sub;
-  std::unique_ptr<message_filters::Synchronizer<ImageSync>> image_sync;
-  std::unique_ptr<message_filters::Synchronizer<ImageDetectionSync>> image_detection_sync;
+  // The message_filters synchronizer in use (exact or approximate time, with or without
+  // detections), kept alive here.
+  std::shared_ptr<void> synchronizer;
   ros::Subscriber pose_sub;
   KeyframeSelector keyframe_selector;
 

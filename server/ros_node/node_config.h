@@ -49,8 +49,11 @@ struct NodeConfig {
   bool run_detector = true;
   /// Metres per unit of 16UC1 depth images (0.001: millimetres, as OpenNI2 drivers publish).
   double depth_scale = 0.001;
-  /// Colour, depth, camera info (and detections) are paired by approximate time: at most this
-  /// far apart, in seconds; the subscribers keep this many messages.
+  /// Colour, depth, camera info (and detections) are paired by stamp: 0 pairs equal stamps only
+  /// (exact time: a frame is handled as soon as its last message arrives; players and drivers
+  /// that stamp both images alike), > 0 pairs stamps at most this far apart, in seconds
+  /// (approximate time, for cameras whose colour and depth stamps differ; a set is handled once
+  /// the next messages show no better match). The subscribers keep sync_queue_size messages.
   double sync_max_interval_s = 0.02;
   int sync_queue_size = 10;
   /// How long a frame waits for its camera pose (TF or pose topic) before it is rejected.
