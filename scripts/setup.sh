@@ -18,6 +18,11 @@ readonly PACKAGES=(
   libyaml-cpp-dev
   libminizip-dev sweethome3d-furniture  # synthetic scenes: the furniture meshes and their zips
   libgtest-dev libgmock-dev libbenchmark-dev
+  # ROS1 (objmap_node, objmap_msgs, the rosbag input; tests start their own rosmaster)
+  catkin ros-message-generation ros-message-runtime python3-genmsg python3-gencpp
+  libroscpp-dev librosbag-dev libmessage-filters-dev libtf2-dev libtf2-ros-dev libtf2-msgs-dev
+  libstd-msgs-dev libgeometry-msgs-dev libsensor-msgs-dev libvisualization-msgs-dev
+  python3-rosmaster python3-roslaunch
 )
 # Packages needed only for a command they provide: a machine may have that command from elsewhere
 # (Node.js from NodeSource, say), and the Debian package would then conflict with it.

@@ -601,5 +601,28 @@ TEST_F(RosNode, BadParametersStopTheNodeAtStartWithTheReason) {
   }
 }
 
+// launch/objmap.launch with its defaults (objmap.example.yaml loaded as parameters) starts a
+// node that passes its parameter check and serves.
+TEST_F(RosNode, ObjmapLaunchStartsANodeThatServes) {
+  const fs::path dir = shared().dir;
+  setenv("ROS_PACKAGE_PATH", (std::string(OBJMAP_SOURCE_DIR) + ":/usr/share").c_str(), 1);
+  setenv("CMAKE_PREFIX_PATH", OBJMAP_DEVEL_DIR, 1);
+  ChildProcess launch({"roslaunch", std::string(OBJMAP_SOURCE_DIR) + "/launch/objmap.launch",
+                       "node_name:=objmap_launched", "run_detector:=false",
+                       "database:=" + (dir / "launched.db").string()},
+                      (dir / "roslaunch.log").string());
+  std::string why;
+  ASSERT_TRUE(launch.Start(&why)) << why;
+  const bool serving = ros::service::waitForService("/objmap_launched/status", ros::Duration(120));
+  objmap_msgs::Status status;
+  const bool answered = serving && ros::service::call("/objmap_launched/status", status);
+  EXPECT_EQ(launch.Stop(SIGINT), 0) << launch.Log();
+  ASSERT_TRUE(serving) << launch.Log();
+  ASSERT_TRUE(answered);
+  EXPECT_TRUE(status.response.ok);
+  EXPECT_EQ(status.response.keyframes, 0);
+  EXPECT_NE(status.response.database.find("launched.db"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace objmap
