@@ -211,9 +211,15 @@ void MapNode::Impl::OnFrame(const sensor_msgs::ImageConstPtr& color,
   } else if (!config.run_detector) {
     given.emplace();  // structure only
   }
+  MapFrame(std::move(frame), stamp, std::move(given));
+}
+
+void MapNode::Impl::MapFrame(RgbdFrame frame, const ros::Time& stamp,
+                             std::optional<std::vector<Detection>> detections) {
   if (!keyframe_selector.IsKeyframe(frame.T_W_C)) return;
   AddKeyframeOutcome outcome;
-  const ServiceStatus status = server->AddKeyframe(std::move(frame), std::move(given), &outcome);
+  const ServiceStatus status =
+      server->AddKeyframe(std::move(frame), std::move(detections), &outcome);
   if (!status.ok()) return Reject(stamp, "the map server refused it: " + status.message);
   ++keyframes_sent;
   ROS_DEBUG_STREAM("objmap_node: keyframe " << outcome.keyframe_id << " from t=" << StampText(stamp)

@@ -57,6 +57,10 @@ struct MapNode::Impl {
   void OnFrame(const sensor_msgs::ImageConstPtr& color, const sensor_msgs::ImageConstPtr& depth,
                const sensor_msgs::CameraInfoConstPtr& info,
                const objmap_msgs::DetectionArrayConstPtr& detections);
+  /// A frame with its pose: keyframe selection, then the map server (detections absent: the
+  /// server's detector runs).
+  void MapFrame(RgbdFrame frame, const ros::Time& stamp,
+                std::optional<std::vector<Detection>> detections);
   void OnPose(const geometry_msgs::PoseStampedConstPtr& pose);
   bool CameraPose(const sensor_msgs::Image& color, Eigen::Isometry3d* T_W_C, std::string* why);
   bool PoseFromTopic(const ros::Time& stamp, Eigen::Isometry3d* T_W_C, std::string* why);
