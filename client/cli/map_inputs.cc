@@ -37,8 +37,7 @@ bool AddPoses(const MapInputOptions& options, MapInput* input, std::string* why)
   return true;
 }
 
-bool OpenOpenNI2(const std::string& argument, const MapInputOptions& options, MapInput* input,
-                 std::string* why) {
+bool OpenOpenNI2(const std::string& argument, MapInput* input, std::string* why) {
 #ifdef OBJMAP_CLI_WITH_OPENNI2
   OpenNI2SourceConfig config;
   if (EndsWith(argument, ".oni")) {
@@ -47,9 +46,8 @@ bool OpenOpenNI2(const std::string& argument, const MapInputOptions& options, Ma
     config.device_uri = argument.substr(sizeof(kOpenNI2Prefix));  // after "openni2:"
   }
   input->stream = OpenNI2Source::Open(config, why);
-  return input->stream != nullptr && AddPoses(options, input, why);
+  return input->stream != nullptr;
 #else
-  (void)options;
   (void)input;
   *why = argument + ": this objmap was built without OpenNI2 (install libopenni2-dev and rebuild)";
   return false;
@@ -60,7 +58,9 @@ bool OpenOpenNI2(const std::string& argument, const MapInputOptions& options, Ma
 
 bool OpenMapInput(const std::string& argument, const MapInputOptions& options, MapInput* input,
                   std::string* why) {
-  if (IsOpenNI2Argument(argument)) return OpenOpenNI2(argument, options, input, why);
+  if (IsOpenNI2Argument(argument)) {
+    return OpenOpenNI2(argument, input, why) && AddPoses(options, input, why);
+  }
   input->sequence = OpenSequence(argument, why);
   if (!input->sequence) return false;
   if (!options.trajectory_path.empty()) {
