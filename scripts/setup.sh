@@ -16,6 +16,7 @@ readonly PACKAGES=(
   libeigen3-dev liboctomap-dev libpcl-dev libopencv-dev nlohmann-json3-dev
   libsqlite3-dev libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc
   libyaml-cpp-dev
+  libopenni2-dev  # live OpenNI2 cameras and .oni recordings for `objmap map`
   libminizip-dev sweethome3d-furniture  # synthetic scenes: the furniture meshes and their zips
   libgtest-dev libgmock-dev libbenchmark-dev
   # ROS1 (objmap_node, objmap_msgs, the rosbag input; tests start their own rosmaster)

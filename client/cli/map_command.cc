@@ -1,5 +1,7 @@
-// `objmap map`: a recorded RGB-D sequence in, an object map out.
+// `objmap map`: an RGB-D sequence, recording or live camera in, an object map out.
+#include <atomic>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -12,6 +14,7 @@
 #include "commands.h"
 #include "detection/centernet_detector.h"
 #include "detection/detections_file.h"
+#include "map_inputs.h"
 #include "mapper/map_export.h"
 #include "pipeline/sequence_runner.h"
 #include "poses_file.h"
@@ -22,8 +25,11 @@ namespace objmap::cli {
 namespace {
 
 constexpr char kMapUsage[] =
-    "usage: objmap map <dataset> --out <dir> [options]\n"
-    "  <dataset>                 7-Scenes folder (frame-NNNNNN.*) or TUM RGB-D folder\n"
+    "usage: objmap map <input> --out <dir> [options]\n"
+    "  <input>                   7-Scenes folder (frame-NNNNNN.*) or TUM RGB-D folder;\n"
+    "                            openni2 | openni2:<device-uri>: a live OpenNI2 camera (runs\n"
+    "                            until --max-frames or Ctrl-C, then writes the map);\n"
+    "                            FILE.oni: an OpenNI2 recording\n"
     "  --out DIR                 output folder: map.bt, objects.json, objects/*.ply, timings.json\n"
     "  --model FILE              CenterNet GraphDef (default: models/centernet_coco.pb)\n"
     "  --detections FILE         take detections from a JSON file instead of the network\n"
@@ -31,6 +37,11 @@ constexpr char kMapUsage[] =
     "  --score-threshold S       detector peak threshold (default 0.15)\n"
     "  --first-frame N           first frame index (default 0)\n"
     "  --max-frames N            number of frames to read (default: all)\n"
+    "  --trajectory FILE         camera / recording: poses, TUM lines `stamp tx ty tz qx qy qz\n"
+    "                            qw` (T_W_C), the nearest in stamp taken; frames without one\n"
+    "                            are skipped. Without it the camera is static at the identity\n"
+    "                            pose\n"
+    "  --trajectory-tolerance S  largest frame/pose stamp difference, seconds (default 0.02)\n"
     "  --min-translation M       keyframe after this much motion, metres (default 0.10)\n"
     "  --min-rotation DEG        keyframe after this much rotation, degrees (default 10)\n"
     "  --every-frame             every frame is a keyframe\n"
@@ -43,6 +54,37 @@ constexpr char kMapUsage[] =
     "  --corrected-poses FILE    after the run, apply these poses as a pose-graph update (lines\n"
     "                            `frame_index tx ty tz qx qy qz qw`, T_W_C) and regenerate the\n"
     "                            map; keyframes whose frame has no line keep their pose\n";
+
+// Set by SIGINT while a run is in progress. A signal handler can only reach a flag of static
+// storage; it is lock-free and touched by nothing else.
+std::atomic<bool> interrupted{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "the SIGINT flag must be lock-free");
+
+void OnInterrupt(int) { interrupted.store(true); }
+
+// Ends a stream cleanly after Ctrl-C, so that a live camera run still writes its map. The
+// previous SIGINT handler comes back when the run is over.
+class InterruptibleStream : public FrameStream {
+ public:
+  explicit InterruptibleStream(FrameStream* inner) : inner_(inner) {
+    interrupted.store(false);
+    previous_ = std::signal(SIGINT, OnInterrupt);
+  }
+  ~InterruptibleStream() override { std::signal(SIGINT, previous_); }
+  FrameStatus Next(RgbdFrame* frame, std::string* why) override {
+    if (interrupted.load()) return FrameStatus::kEnded;
+    const FrameStatus status = inner_->Next(frame, why);
+    // A read cut short by the signal is the end asked for, not a failure.
+    return interrupted.load() ? FrameStatus::kEnded : status;
+  }
+  std::size_t size() const override { return inner_->size(); }
+  std::string Describe() const override { return inner_->Describe(); }
+  [[nodiscard]] bool was_interrupted() const { return interrupted.load(); }
+
+ private:
+  FrameStream* inner_;
+  void (*previous_)(int) = SIG_DFL;
+};
 
 // Wraps a detector and keeps what it found per frame, for --save-detections.
 class RecordingDetector : public Detector {
@@ -157,6 +199,16 @@ SequenceRunConfig RunConfigFrom(Arguments& args) {
   return config;
 }
 
+MapInputOptions InputOptionsFrom(Arguments& args, const SequenceRunConfig& run_config) {
+  MapInputOptions options;
+  options.first_frame = run_config.first_frame;
+  options.max_frames = run_config.max_frames;
+  options.trajectory_path = args.Get("--trajectory", "");
+  options.trajectory_match.max_stamp_difference_s =
+      args.GetNumber("--trajectory-tolerance", options.trajectory_match.max_stamp_difference_s);
+  return options;
+}
+
 int Fail(const std::string& message) {
   std::cerr << "objmap map: " << message << "\n";
   return 1;
@@ -202,27 +254,34 @@ int RunMapCommand(int argc, char** argv) {
       argc, argv,
       {"--out", "--model", "--detections", "--save-detections", "--score-threshold",
        "--first-frame", "--max-frames", "--min-translation", "--min-rotation", "--every-nth-frame",
-       "--min-observations", "--min-confidence", "--min-detection-rate", "--corrected-poses"},
+       "--min-observations", "--min-confidence", "--min-detection-rate", "--corrected-poses",
+       "--trajectory", "--trajectory-tolerance"},
       {"--every-frame", "--stop-on-error", "--help"});
   if (args.Has("--help")) {
     std::cout << kMapUsage;
     return 0;
   }
   const MapperConfig mapper_config = MapperConfigFrom(args);
-  const SequenceRunConfig run_config = RunConfigFrom(args);
+  SequenceRunConfig run_config = RunConfigFrom(args);
+  const MapInputOptions input_options = InputOptionsFrom(args, run_config);
   if (!args.error().empty() || args.positional().size() != 1 || !args.Has("--out")) {
     std::cerr << (args.error().empty() ? "" : args.error() + "\n") << kMapUsage;
     return 2;
   }
   std::string why;
   if (!mapper_config.IsValid(&why) || !run_config.IsValid(&why)) return Fail(why);
-  auto reader = OpenSequence(args.positional()[0], &why);
-  if (!reader) return Fail(why);
+  MapInput input;
+  if (!OpenMapInput(args.positional()[0], input_options, &input, &why)) return Fail(why);
+  if (input.selection_applied) {
+    run_config.first_frame = 0;
+    run_config.max_frames = 0;
+  }
   auto detector = MakeDetector(args, &why);
   if (!detector) return Fail(why);
   auto recorder = std::make_unique<RecordingDetector>(std::move(detector));
-  std::cout << "mapping " << reader->Describe() << " with the " << recorder->Name()
+  std::cout << "mapping " << input.stream->Describe() << " with the " << recorder->Name()
             << " detector\n";
+  if (!input.note.empty()) std::cout << input.note << "\n";
 
   Mapper mapper(mapper_config);
   SequenceRunReport report;
@@ -231,8 +290,10 @@ int RunMapCommand(int argc, char** argv) {
     bar.Update(done, total, keyframes);
   };
   const auto start = std::chrono::steady_clock::now();
+  InterruptibleStream stream(input.stream.get());
   const bool completed =
-      RunSequence(*reader, recorder.get(), &mapper, run_config, progress, &report, &why);
+      RunSequence(&stream, recorder.get(), &mapper, run_config, progress, &report, &why);
+  if (stream.was_interrupted()) std::cerr << "\ninterrupted: writing the map of the frames read\n";
   const double wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   for (const std::string& message : report.skipped) std::cerr << "skipped " << message << "\n";

@@ -9,6 +9,7 @@ namespace objmap::cli {
 class ProgressBar {
  public:
   /// Draws "[####....] done/total frames, keyframes keyframes"; ends the line when done == total.
+  /// With total 0 (unknown: a live camera) draws "done frames, keyframes keyframes" instead.
   void Update(std::size_t done, std::size_t total, std::size_t keyframes);
 
  private:

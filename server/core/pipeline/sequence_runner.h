@@ -1,11 +1,13 @@
 #pragma once
-// Runs a recorded sequence through detector and mapper: the body of `objmap map`.
+// Runs a stream of frames (a recorded sequence, a recording, a live camera) through detector and
+// mapper: the body of `objmap map`.
 
 #include <cstddef>
 #include <functional>
 #include <string>
 #include <vector>
 
+#include "dataset/frame_stream.h"
 #include "dataset/keyframe_selector.h"
 #include "dataset/sequence_reader.h"
 #include "detection/detector.h"
@@ -16,9 +18,9 @@ namespace objmap {
 /// Which frames of a sequence are mapped and what happens with bad ones.
 struct SequenceRunConfig {
   KeyframeSelectorConfig keyframes;
-  /// First frame index to read.
+  /// Frames to pass over before the first one mapped (a sequence folder: the first frame index).
   std::size_t first_frame = 0;
-  /// Number of frames to read from first_frame; 0 reads to the end.
+  /// Number of frames to read from first_frame; 0 reads to the end of the stream.
   std::size_t max_frames = 0;
   /// A frame that cannot be read or mapped stops the run (true) or is skipped with a message
   /// naming its file (false, the default).
@@ -29,7 +31,7 @@ struct SequenceRunConfig {
 
 /// Per-keyframe record of a run, for timings and reports.
 struct KeyframeReport {
-  std::size_t frame_index = 0;
+  std::size_t frame_index = 0;  ///< RgbdFrame::frame_index of the keyframe
   double detection_ms = 0.0;
   int detections = 0;
   KeyframeResult result;
@@ -41,12 +43,20 @@ struct SequenceRunReport {
   std::vector<std::string> skipped;  ///< one message per skipped frame, naming the file
 };
 
-/// Called after every frame: (frames done, frames in total, keyframes so far).
+/// Called after every frame: (frames done, frames in total or 0 when the stream does not know,
+/// keyframes so far).
 using ProgressCallback = std::function<void(std::size_t, std::size_t, std::size_t)>;
 
-/// Maps frames of `reader` in order: keyframe selection by camera motion, then detection and
-/// Mapper::AddKeyframe. Returns false only when the run stops (bad frame with
-/// stop_on_bad_frame, an empty selection); `why` names the frame and the file.
+/// Maps the frames of `stream` in order until it ends or max_frames were read: keyframe selection
+/// by camera motion, then detection and Mapper::AddKeyframe. Returns false only when the run
+/// stops (bad frame with stop_on_bad_frame, a failed stream); `why` names the frame and the
+/// problem. A stream that fails after frames were mapped keeps what was mapped in `mapper`.
+[[nodiscard]] bool RunSequence(FrameStream* stream, Detector* detector, Mapper* mapper,
+                               const SequenceRunConfig& config, const ProgressCallback& progress,
+                               SequenceRunReport* report, std::string* why);
+
+/// The same over a recorded sequence, reading only the frames selected (random access); false
+/// also for an empty selection.
 [[nodiscard]] bool RunSequence(const SequenceReader& reader, Detector* detector, Mapper* mapper,
                                const SequenceRunConfig& config, const ProgressCallback& progress,
                                SequenceRunReport* report, std::string* why);
