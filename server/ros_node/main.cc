@@ -4,10 +4,42 @@
 
 #include <filesystem>
 
+#include "dataset/frame_stream.h"
 #include "detection/centernet_detector.h"
 #include "map_node.h"
 #include "map_server/map_server.h"
 #include "node_config.h"
+#ifdef OBJMAP_NODE_WITH_OPENNI2
+#include "openni2/openni2_source.h"
+#endif
+
+namespace {
+
+// The node's own camera for input "openni2"; nullptr and the reason when it cannot be opened.
+std::unique_ptr<objmap::FrameStream> OpenCamera(const objmap::ros_node::CameraInputConfig& input,
+                                                std::string* why) {
+#ifdef OBJMAP_NODE_WITH_OPENNI2
+  objmap::OpenNI2SourceConfig config;
+  config.device_uri = input.device_uri;
+  config.oni_path = input.oni_path;
+  config.width = input.width;
+  config.height = input.height;
+  config.fps = input.fps;
+  config.depth_to_color_registration = input.depth_to_color_registration;
+  config.mirror = input.mirror;
+  if (!config.IsValid(why)) {
+    *why = "~openni2: " + *why;
+    return nullptr;
+  }
+  return objmap::OpenNI2Source::Open(config, why);
+#else
+  (void)input;
+  *why = "~input openni2: objmap_node was built without OpenNI2 (Debian: libopenni2-dev)";
+  return nullptr;
+#endif
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "objmap_node");
@@ -36,6 +68,14 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
+  std::unique_ptr<objmap::FrameStream> camera;
+  if (config.input == "openni2") {
+    camera = OpenCamera(config.openni2, &why);
+    if (!camera) {
+      ROS_FATAL_STREAM("objmap_node: " << why);
+      return 2;
+    }
+  }
   std::shared_ptr<objmap::MapServer> server =
       objmap::MapServer::Open(config.server.map_server, config.database, std::move(detector), &why);
   if (!server) {
@@ -47,7 +87,7 @@ int main(int argc, char** argv) {
   ros::AsyncSpinner spinner(2);
   spinner.start();
   {
-    objmap::ros_node::MapNode map_node(node, private_node, config, server);
+    objmap::ros_node::MapNode map_node(node, private_node, config, server, std::move(camera));
     const objmap::ServerStatus status = server->Status();
     ROS_INFO_STREAM("objmap_node: serving " << config.database << " (" << status.keyframes
                                             << " keyframes, " << status.objects

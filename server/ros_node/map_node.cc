@@ -37,18 +37,28 @@ MapNode::Impl::Impl(const ros::NodeHandle& node_in, const ros::NodeHandle& priva
       keyframe_selector(config_in.keyframes) {}
 
 MapNode::MapNode(const ros::NodeHandle& node, const ros::NodeHandle& private_node,
-                 const NodeConfig& config, std::shared_ptr<MapServer> server)
+                 const NodeConfig& config, std::shared_ptr<MapServer> server,
+                 std::unique_ptr<FrameStream> camera)
     : impl_(std::make_unique<Impl>(node, private_node, config, std::move(server))) {
   impl_->AdvertiseTopics();
   impl_->AdvertiseServices();
-  impl_->SubscribeInputs();
+  impl_->camera = std::move(camera);
+  if (impl_->camera) {
+    if (!impl_->config.openni2.static_camera) {
+      impl_->tf_listener = std::make_unique<tf2_ros::TransformListener>(impl_->tf_buffer, node);
+    }
+    impl_->camera_thread = std::thread([impl = impl_.get()] { impl->ReadCameraLoop(); });
+  } else {
+    impl_->SubscribeInputs();
+  }
   impl_->publisher_thread = std::thread([impl = impl_.get()] { impl->PublishChangesLoop(); });
 }
 
 MapNode::~MapNode() {
   impl_->stopping = true;
-  impl_->frame_spinner->stop();
+  if (impl_->frame_spinner) impl_->frame_spinner->stop();
   impl_->pose_arrived.notify_all();
+  if (impl_->camera_thread.joinable()) impl_->camera_thread.join();
   if (impl_->publisher_thread.joinable()) impl_->publisher_thread.join();
 }
 
@@ -155,6 +165,11 @@ bool MapNode::Impl::CameraPose(const sensor_msgs::Image& color, Eigen::Isometry3
     *why = "the colour image has no header.frame_id and ~camera_frame is not set";
     return false;
   }
+  return PoseFromTf(camera_frame, stamp, T_W_C, why);
+}
+
+bool MapNode::Impl::PoseFromTf(const std::string& camera_frame, const ros::Time& stamp,
+                               Eigen::Isometry3d* T_W_C, std::string* why) {
   try {
     const geometry_msgs::TransformStamped transform = tf_buffer.lookupTransform(
         config.world_frame, camera_frame, stamp, ros::Duration(config.pose_timeout_s));
@@ -212,6 +227,41 @@ void MapNode::Impl::OnFrame(const sensor_msgs::ImageConstPtr& color,
     given.emplace();  // structure only
   }
   MapFrame(std::move(frame), stamp, std::move(given));
+}
+
+void MapNode::Impl::ReadCameraLoop() {
+  const std::string source = camera->Describe();
+  ROS_INFO_STREAM("objmap_node: reading " << source);
+  while (!stopping) {
+    RgbdFrame frame;
+    std::string why;
+    const FrameStatus status = camera->Next(&frame, &why);
+    // The camera's own clock is not ROS time: a frame is placed at the moment it was read.
+    const ros::Time stamp = ros::Time::now();
+    if (status == FrameStatus::kEnded) {
+      ROS_INFO_STREAM("objmap_node: " << source << " ended; the map is still served");
+      return;
+    }
+    if (status == FrameStatus::kFailed) {
+      ROS_ERROR_STREAM("objmap_node: " << source << " failed: " << why
+                                       << "; the map is still served");
+      std::lock_guard<std::mutex> lock(rejection_mutex);
+      last_rejection = source + " failed: " + why;
+      return;
+    }
+    if (status == FrameStatus::kFrame && !config.openni2.static_camera &&
+        !PoseFromTf(config.camera_frame, stamp, &frame.T_W_C, &why)) {
+      Reject(stamp, why);
+    } else if (status == FrameStatus::kBadFrame) {
+      Reject(stamp, why);
+    } else {
+      frame.stamp_s = stamp.toSec();
+      std::optional<std::vector<Detection>> detections;
+      if (!config.run_detector) detections.emplace();  // structure only
+      MapFrame(std::move(frame), stamp, std::move(detections));
+    }
+    ++frames_received;
+  }
 }
 
 void MapNode::Impl::MapFrame(RgbdFrame frame, const ros::Time& stamp,

@@ -13,6 +13,7 @@ class NodeHandle;
 }
 
 namespace objmap {
+class FrameStream;
 class MapServer;
 }
 
@@ -25,9 +26,11 @@ class MapNode {
  public:
   /// Subscribes, advertises and starts the thread that publishes map changes. `node` resolves
   /// the input topics (remap them: rgb/image, depth/image, rgb/camera_info), `private_node` the
-  /// services and published topics (~query_objects, ~objects, ...).
+  /// services and published topics (~query_objects, ~objects, ...). With `camera` (input
+  /// "openni2"), frames are read from it on a thread of their own instead of the topics.
   MapNode(const ros::NodeHandle& node, const ros::NodeHandle& private_node,
-          const NodeConfig& config, std::shared_ptr<MapServer> server);
+          const NodeConfig& config, std::shared_ptr<MapServer> server,
+          std::unique_ptr<FrameStream> camera = nullptr);
   /// Stops taking frames and publishing; the MapServer is left to its owner.
   ~MapNode();
   MapNode(const MapNode&) = delete;

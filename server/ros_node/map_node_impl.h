@@ -30,6 +30,7 @@
 #include <mutex>
 #include <thread>
 
+#include "dataset/frame_stream.h"
 #include "dataset/keyframe_selector.h"
 #include "map_node.h"
 #include "map_server/map_server.h"
@@ -62,6 +63,11 @@ struct MapNode::Impl {
   void MapFrame(RgbdFrame frame, const ros::Time& stamp,
                 std::optional<std::vector<Detection>> detections);
   void OnPose(const geometry_msgs::PoseStampedConstPtr& pose);
+  /// Reads `camera` until it ends, fails or the node stops (input "openni2").
+  void ReadCameraLoop();
+  /// T_W_C from TF: world_frame <- `camera_frame` at `stamp`, waiting up to pose_timeout_s.
+  bool PoseFromTf(const std::string& camera_frame, const ros::Time& stamp, Eigen::Isometry3d* T_W_C,
+                  std::string* why);
   bool CameraPose(const sensor_msgs::Image& color, Eigen::Isometry3d* T_W_C, std::string* why);
   bool PoseFromTopic(const ros::Time& stamp, Eigen::Isometry3d* T_W_C, std::string* why);
   void Reject(const ros::Time& stamp, const std::string& why);
@@ -109,6 +115,8 @@ struct MapNode::Impl {
   // detections), kept alive here.
   std::shared_ptr<void> synchronizer;
   ros::Subscriber pose_sub;
+  std::unique_ptr<FrameStream> camera;
+  std::thread camera_thread;
   KeyframeSelector keyframe_selector;
 
   std::mutex pose_mutex;

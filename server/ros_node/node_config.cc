@@ -145,6 +145,7 @@ void VisitNodeKeys(NodeConfig* c, ParamReader& v) {
   v("sync_max_interval_s", &c->sync_max_interval_s);
   v("sync_queue_size", &c->sync_queue_size);
   v("pose_timeout_s", &c->pose_timeout_s);
+  v("input", &c->input);
   v.Section("keyframes");
   v("min_translation_m", &c->keyframes.min_translation_m);
   v("min_rotation_deg", &c->keyframes.min_rotation_deg);
@@ -153,6 +154,15 @@ void VisitNodeKeys(NodeConfig* c, ParamReader& v) {
   v("markers", &c->publish.markers);
   v("occupied_every_keyframes", &c->publish.occupied_every_keyframes);
   v("occupied_max_points", &c->publish.occupied_max_points);
+  v.Section("openni2");
+  v("device_uri", &c->openni2.device_uri);
+  v("oni_path", &c->openni2.oni_path);
+  v("width", &c->openni2.width);
+  v("height", &c->openni2.height);
+  v("fps", &c->openni2.fps);
+  v("depth_to_color_registration", &c->openni2.depth_to_color_registration);
+  v("mirror", &c->openni2.mirror);
+  v("static_camera", &c->openni2.static_camera);
 }
 
 }  // namespace
@@ -188,6 +198,16 @@ bool NodeConfig::IsValid(std::string* why) const {
   }
   if (!(pose_timeout_s >= 0.0)) {
     *why = "~pose_timeout_s must be >= 0";
+    return false;
+  }
+  if (input != "topics" && input != "openni2") {
+    *why = "~input '" + input + "' must be topics or openni2";
+    return false;
+  }
+  if (input == "openni2" && !openni2.static_camera && camera_frame.empty()) {
+    *why =
+        "~input openni2 needs ~camera_frame (the TF frame of the camera) or "
+        "~openni2/static_camera true";
     return false;
   }
   std::string reason;

@@ -26,6 +26,24 @@ struct PublishConfig {
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
 
+/// objmap_node's own OpenNI2 camera (input "openni2"), section `openni2`.
+struct CameraInputConfig {
+  /// Device URI as OpenNI2 lists it; empty: the first device found.
+  std::string device_uri;
+  /// An .oni recording played back instead of a device (every frame, none dropped).
+  std::string oni_path;
+  /// Live streams: resolution and frame rate, depth registered to colour when the device can.
+  int width = 640;
+  int height = 480;
+  int fps = 30;
+  bool depth_to_color_registration = true;
+  bool mirror = false;
+  /// The camera does not move: every frame has the identity pose in world_frame and no TF is
+  /// looked up (keyframes then come only from keyframes/every_nth_frame). Otherwise the pose
+  /// is TF world_frame <- camera_frame at the time a frame is read.
+  bool static_camera = false;
+};
+
 /// Everything objmap_node reads at start. Parameters live in the node's private namespace:
 /// the keys below at the top level, and the map server's sections (server, store, mapper,
 /// segmenter, ..., detector: the objmap_server YAML layout, server/apps/objmap.example.yaml) as
@@ -62,6 +80,10 @@ struct NodeConfig {
   KeyframeSelectorConfig keyframes;
   /// Section `publish`.
   PublishConfig publish;
+  /// Where frames come from: "topics" (a camera driver's topics, the default) or "openni2" (the
+  /// node reads an OpenNI2 device or .oni recording itself, section `openni2`).
+  std::string input = "topics";
+  CameraInputConfig openni2;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };

@@ -1,0 +1,192 @@
+// objmap_node reading an OpenNI2 camera itself (~input openni2) against a real rosmaster: the
+// failure paths this machine can reach (no device, a missing recording) and an .oni recording
+// written by the test (tests/openni2/oni_file_writer.h) played into the map. A live camera's own
+// paths (enumeration, video modes, registration) need hardware; see docs/ros.md.
+#include <gtest/gtest.h>
+#include <objmap_msgs/QueryOccupancy.h>
+#include <objmap_msgs/Status.h>
+#include <ros/ros.h>
+
+#include <filesystem>
+#include <thread>
+
+#include "openni2/oni_file_writer.h"
+#include "ros_node/ros_processes.h"
+
+namespace objmap {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::ChildProcess;
+using testing::RosMaster;
+
+class RosNodeCamera : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir() = fs::temp_directory_path() / ("objmap_ros_camera_" + std::to_string(getpid()));
+    fs::remove_all(dir());
+    fs::create_directories(dir());
+    master() = std::make_unique<RosMaster>(dir().string());
+    std::string why;
+    if (!master()->Start(&why)) {
+      setup_error() = why;
+      return;
+    }
+    int argc = 0;
+    ros::init(argc, nullptr, "objmap_ros_camera_test",
+              ros::init_options::NoSigintHandler | ros::init_options::AnonymousName);
+    ros::start();
+  }
+
+  static void TearDownTestSuite() {
+    if (ros::isStarted()) ros::shutdown();
+    if (master()) master()->Stop();
+    master().reset();
+    fs::remove_all(dir());
+  }
+
+  void SetUp() override { ASSERT_TRUE(setup_error().empty()) << setup_error(); }
+
+  static fs::path& dir() {
+    static fs::path path;
+    return path;
+  }
+  static std::unique_ptr<RosMaster>& master() {
+    static std::unique_ptr<RosMaster> instance;
+    return instance;
+  }
+  static std::string& setup_error() {
+    static std::string text;
+    return text;
+  }
+
+  // objmap_node with the camera input, structure only, under its own name and database.
+  static std::unique_ptr<ChildProcess> StartNode(const std::string& name,
+                                                 const std::vector<std::string>& parameters) {
+    std::vector<std::string> argv = {OBJMAP_NODE_PATH, "__name:=" + name,
+                                     "_database:=" + (dir() / (name + ".db")).string(),
+                                     "_input:=openni2", "_run_detector:=false"};
+    argv.insert(argv.end(), parameters.begin(), parameters.end());
+    auto node = std::make_unique<ChildProcess>(argv, (dir() / (name + ".log")).string());
+    std::string why;
+    EXPECT_TRUE(node->Start(&why)) << why;
+    return node;
+  }
+};
+
+TEST_F(RosNodeCamera, WithoutACameraTheNodeSaysSoAndExits) {
+  auto node = StartNode("objmap_node_no_camera", {"_openni2/static_camera:=true"});
+  const int code = node->WaitForExit(std::chrono::seconds(60));
+  if (code != 2 && node->Log().find("reading OpenNI2 device") != std::string::npos) {
+    node->Stop(SIGINT);
+    GTEST_SKIP() << "SKIPPED: an OpenNI2 camera is attached to this machine";
+  }
+  EXPECT_EQ(code, 2) << node->Log();
+  EXPECT_NE(node->Log().find("no OpenNI2 device found"), std::string::npos) << node->Log();
+}
+
+TEST_F(RosNodeCamera, AMissingRecordingIsNamed) {
+  const std::string path = (dir() / "absent.oni").string();
+  auto node = StartNode("objmap_node_no_file",
+                        {"_openni2/static_camera:=true", "_openni2/oni_path:=" + path});
+  EXPECT_EQ(node->WaitForExit(std::chrono::seconds(60)), 2) << node->Log();
+  EXPECT_NE(node->Log().find(path + ": no such .oni file"), std::string::npos) << node->Log();
+}
+
+TEST_F(RosNodeCamera, AMovingCameraNeedsItsTfFrame) {
+  auto node = StartNode("objmap_node_no_frame", {});
+  EXPECT_EQ(node->WaitForExit(std::chrono::seconds(60)), 2) << node->Log();
+  EXPECT_NE(node->Log().find("~input openni2 needs ~camera_frame"), std::string::npos)
+      << node->Log();
+}
+
+TEST_F(RosNodeCamera, PlaysARecordingIntoTheMap) {
+  // A static camera 1.5 m in front of a flat wall, six frames.
+  testing::OniTestRecording recording;
+  recording.width = 160;
+  recording.height = 120;
+  constexpr int kFrames = 6;
+  for (int i = 0; i < kFrames; ++i) {
+    testing::OniTestFrame frame;
+    frame.timestamp_us = 33333u * (i + 1);
+    frame.depth_mm.assign(recording.width * recording.height, 1500);
+    frame.rgb.assign(recording.width * recording.height * 3, 128);
+    recording.frames.push_back(frame);
+  }
+  const std::string path = (dir() / "wall.oni").string();
+  ASSERT_TRUE(testing::WriteOniFile(path, recording));
+  auto node =
+      StartNode("objmap_node_oni", {"_openni2/static_camera:=true", "_openni2/oni_path:=" + path,
+                                    "_keyframes/every_nth_frame:=1"});
+  bool serving = false;
+  for (int i = 0; i < 600 && !serving && node->running(); ++i) {
+    serving = ros::service::waitForService("/objmap_node_oni/status", ros::Duration(0.2));
+  }
+  ASSERT_TRUE(serving) << node->Log();
+  objmap_msgs::Status status;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (ros::service::call("/objmap_node_oni/status", status) &&
+         status.response.frames_received < kFrames && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  EXPECT_EQ(status.response.frames_received, kFrames) << node->Log();
+  EXPECT_EQ(status.response.frames_rejected, 0) << status.response.last_rejection;
+  EXPECT_EQ(status.response.keyframes, kFrames);
+
+  // The wall is occupied where the camera looks; the air in front of it is free.
+  objmap_msgs::QueryOccupancy wall;
+  wall.request.region_min.x = wall.request.region_min.y = -0.1;
+  wall.request.region_max.x = wall.request.region_max.y = 0.1;
+  wall.request.region_min.z = 1.45;
+  wall.request.region_max.z = 1.55;
+  ASSERT_TRUE(ros::service::call("/objmap_node_oni/query_occupancy", wall));
+  ASSERT_TRUE(wall.response.ok) << wall.response.error;
+  EXPECT_GT(wall.response.occupied, 100u);
+  objmap_msgs::QueryOccupancy air = wall;
+  air.request.region_min.z = 0.7;
+  air.request.region_max.z = 0.8;
+  ASSERT_TRUE(ros::service::call("/objmap_node_oni/query_occupancy", air));
+  EXPECT_EQ(air.response.occupied, 0u);
+  EXPECT_GT(air.response.free, 0u);
+  EXPECT_TRUE(node->running()) << "the node keeps serving after the recording ended";
+  EXPECT_EQ(node->Stop(SIGINT), 0) << node->Log();
+  EXPECT_NE(node->Log().find("ended; the map is still served"), std::string::npos);
+}
+
+// launch/objmap_openni2.launch with a recording and a static camera serves the map it makes.
+TEST_F(RosNodeCamera, OpenNI2LaunchPlaysARecording) {
+  testing::OniTestRecording recording;
+  recording.width = 160;
+  recording.height = 120;
+  for (int i = 0; i < 3; ++i) {
+    testing::OniTestFrame frame;
+    frame.timestamp_us = 33333u * (i + 1);
+    frame.depth_mm.assign(recording.width * recording.height, 1200);
+    frame.rgb.assign(recording.width * recording.height * 3, 90);
+    recording.frames.push_back(frame);
+  }
+  const std::string path = (dir() / "launched.oni").string();
+  ASSERT_TRUE(testing::WriteOniFile(path, recording));
+  setenv("ROS_PACKAGE_PATH", (std::string(OBJMAP_SOURCE_DIR) + ":/usr/share").c_str(), 1);
+  setenv("CMAKE_PREFIX_PATH", OBJMAP_DEVEL_DIR, 1);
+  ChildProcess launch(
+      {"roslaunch", std::string(OBJMAP_SOURCE_DIR) + "/launch/objmap_openni2.launch",
+       "node_name:=objmap_openni2_launched", "oni_path:=" + path, "static_camera:=true",
+       "every_nth_frame:=1", "run_detector:=false",
+       "database:=" + (dir() / "openni2_launched.db").string()},
+      (dir() / "roslaunch_openni2.log").string());
+  std::string why;
+  ASSERT_TRUE(launch.Start(&why)) << why;
+  objmap_msgs::Status status;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (std::chrono::steady_clock::now() < deadline && launch.running() &&
+         !(ros::service::call("/objmap_openni2_launched/status", status) &&
+           status.response.frames_received == 3)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  EXPECT_EQ(status.response.keyframes, 3) << launch.Log();
+  EXPECT_EQ(launch.Stop(SIGINT), 0) << launch.Log();
+}
+
+}  // namespace
+}  // namespace objmap
