@@ -4,6 +4,16 @@
 set(OBJMAP_ROS_COMPONENTS roscpp message_generation message_runtime message_filters std_msgs
   geometry_msgs sensor_msgs visualization_msgs tf2 tf2_ros tf2_msgs rosbag rosbag_storage)
 
+# catkin, genmsg and the ROS CMake configs run Python modules that Debian installs for its own
+# python3; a pyenv (or virtualenv) python3 first on PATH lacks them. Both variables default to
+# the system interpreter unless the caller chose one.
+if(NOT DEFINED PYTHON_EXECUTABLE AND EXISTS /usr/bin/python3)
+  set(PYTHON_EXECUTABLE /usr/bin/python3 CACHE FILEPATH "Python for catkin and genmsg")
+endif()
+if(NOT DEFINED Python3_EXECUTABLE AND DEFINED PYTHON_EXECUTABLE)
+  set(Python3_EXECUTABLE ${PYTHON_EXECUTABLE} CACHE FILEPATH "Python for the ROS CMake configs")
+endif()
+
 # objmap's tests start their own rosmaster (tests/ros_node); catkin's test set-up would add a
 # second GoogleTest build beside the one tests/ finds.
 set(CATKIN_ENABLE_TESTING OFF CACHE BOOL "catkin's own test targets (objmap does not use them)")
