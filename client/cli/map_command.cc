@@ -7,11 +7,13 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <set>
 
 #include "arguments.h"
 #include "commands.h"
 #include "detection/centernet_detector.h"
 #include "detection/detections_file.h"
+#include "map_inputs.h"
 #include "mapper/map_export.h"
 #include "pipeline/sequence_runner.h"
 #include "poses_file.h"
@@ -22,8 +24,8 @@ namespace objmap::cli {
 namespace {
 
 constexpr char kMapUsage[] =
-    "usage: objmap map <dataset> --out <dir> [options]\n"
-    "  <dataset>                 7-Scenes folder (frame-NNNNNN.*) or TUM RGB-D folder\n"
+    "usage: objmap map <input> --out <dir> [options]\n"
+    "  <input>                   dataset folder or ROS bag (see inputs below)\n"
     "  --out DIR                 output folder: map.bt, objects.json, objects/*.ply, timings.json\n"
     "  --model FILE              CenterNet GraphDef (default: models/centernet_coco.pb)\n"
     "  --detections FILE         take detections from a JSON file instead of the network\n"
@@ -198,25 +200,25 @@ bool ApplyCorrectedPoses(const std::string& path, const SequenceRunReport& repor
 }  // namespace
 
 int RunMapCommand(int argc, char** argv) {
-  Arguments args(
-      argc, argv,
+  std::set<std::string> flags_with_value(
       {"--out", "--model", "--detections", "--save-detections", "--score-threshold",
        "--first-frame", "--max-frames", "--min-translation", "--min-rotation", "--every-nth-frame",
-       "--min-observations", "--min-confidence", "--min-detection-rate", "--corrected-poses"},
-      {"--every-frame", "--stop-on-error", "--help"});
+       "--min-observations", "--min-confidence", "--min-detection-rate", "--corrected-poses"});
+  flags_with_value.merge(MapInputFlags());
+  Arguments args(argc, argv, flags_with_value, {"--every-frame", "--stop-on-error", "--help"});
   if (args.Has("--help")) {
-    std::cout << kMapUsage;
+    std::cout << kMapUsage << kMapInputUsage;
     return 0;
   }
   const MapperConfig mapper_config = MapperConfigFrom(args);
   const SequenceRunConfig run_config = RunConfigFrom(args);
   if (!args.error().empty() || args.positional().size() != 1 || !args.Has("--out")) {
-    std::cerr << (args.error().empty() ? "" : args.error() + "\n") << kMapUsage;
+    std::cerr << (args.error().empty() ? "" : args.error() + "\n") << kMapUsage << kMapInputUsage;
     return 2;
   }
   std::string why;
   if (!mapper_config.IsValid(&why) || !run_config.IsValid(&why)) return Fail(why);
-  auto reader = OpenSequence(args.positional()[0], &why);
+  auto reader = OpenMapInput(args.positional()[0], MapInputOptionsFrom(args), &why);
   if (!reader) return Fail(why);
   auto detector = MakeDetector(args, &why);
   if (!detector) return Fail(why);
