@@ -40,7 +40,7 @@ target_include_directories(objmap_ros_interfaces SYSTEM INTERFACE ${catkin_INCLU
 target_link_libraries(objmap_ros_interfaces INTERFACE ${catkin_LIBRARIES})
 add_dependencies(objmap_ros_interfaces objmap_msgs_generate_messages_cpp)
 
-foreach(folder server/ros_bridge server/rosbag_input server/ros_node)
+foreach(folder server/ros_bridge server/rosbag_input server/ros_node server/ros_player)
   if(EXISTS ${PROJECT_SOURCE_DIR}/${folder}/CMakeLists.txt)
     add_subdirectory(${folder})
   endif()
