@@ -50,11 +50,20 @@ target_include_directories(objmap_ros_interfaces SYSTEM INTERFACE ${catkin_INCLU
 target_link_libraries(objmap_ros_interfaces INTERFACE ${catkin_LIBRARIES})
 add_dependencies(objmap_ros_interfaces objmap_msgs_generate_messages_cpp)
 
-foreach(folder server/ros_bridge server/rosbag_input server/ros_node)
+foreach(folder server/ros_bridge server/rosbag_input server/ros_node server/ros_player)
   if(EXISTS ${PROJECT_SOURCE_DIR}/${folder}/CMakeLists.txt)
     add_subdirectory(${folder})
   endif()
 endforeach()
+
+# `objmap map file.bag`: the CLI (client/cli, configured before this file, when no ROS target
+# existed yet) gets its bag branch here, once objmap_rosbag_input does. Without ROS this block
+# is never reached and the CLI answers `.bag` paths with "built without ROS".
+if(TARGET objmap AND TARGET objmap_rosbag_input)
+  target_sources(objmap PRIVATE ${PROJECT_SOURCE_DIR}/client/cli/map_inputs_rosbag.cc)
+  target_link_libraries(objmap PRIVATE objmap_rosbag_input)
+  target_compile_definitions(objmap PRIVATE OBJMAP_CLI_WITH_ROSBAG)
+endif()
 
 # Executables above go to the devel space (devel/lib/objmap, where rosrun and roslaunch find
 # them); the tests and benchmarks that follow keep the usual build tree layout.

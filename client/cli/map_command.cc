@@ -9,6 +9,7 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <set>
 
 #include "arguments.h"
 #include "commands.h"
@@ -29,7 +30,10 @@ constexpr char kMapUsage[] =
     "  <input>                   7-Scenes folder (frame-NNNNNN.*) or TUM RGB-D folder;\n"
     "                            openni2 | openni2:<device-uri>: a live OpenNI2 camera (runs\n"
     "                            until --max-frames or Ctrl-C, then writes the map);\n"
-    "                            FILE.oni: an OpenNI2 recording\n"
+    "                            FILE.oni: an OpenNI2 recording;\n"
+    "                            FILE.bag: a ROS1 bag (builds with ROS): colour, depth and\n"
+    "                            camera info paired by stamp, poses from /tf + /tf_static at\n"
+    "                            each colour stamp; topics left unset are auto-detected\n"
     "  --out DIR                 output folder: map.bt, objects.json, objects/*.ply, timings.json\n"
     "  --model FILE              CenterNet GraphDef (default: models/centernet_coco.pb)\n"
     "  --detections FILE         take detections from a JSON file instead of the network\n"
@@ -206,6 +210,7 @@ MapInputOptions InputOptionsFrom(Arguments& args, const SequenceRunConfig& run_c
   options.trajectory_path = args.Get("--trajectory", "");
   options.trajectory_match.max_stamp_difference_s =
       args.GetNumber("--trajectory-tolerance", options.trajectory_match.max_stamp_difference_s);
+  BagOptionsFrom(args, &options);
   return options;
 }
 
@@ -250,22 +255,22 @@ bool ApplyCorrectedPoses(const std::string& path, const SequenceRunReport& repor
 }  // namespace
 
 int RunMapCommand(int argc, char** argv) {
-  Arguments args(
-      argc, argv,
+  std::set<std::string> flags_with_value(
       {"--out", "--model", "--detections", "--save-detections", "--score-threshold",
        "--first-frame", "--max-frames", "--min-translation", "--min-rotation", "--every-nth-frame",
        "--min-observations", "--min-confidence", "--min-detection-rate", "--corrected-poses",
-       "--trajectory", "--trajectory-tolerance"},
-      {"--every-frame", "--stop-on-error", "--help"});
+       "--trajectory", "--trajectory-tolerance"});
+  flags_with_value.merge(MapBagFlags());
+  Arguments args(argc, argv, flags_with_value, {"--every-frame", "--stop-on-error", "--help"});
   if (args.Has("--help")) {
-    std::cout << kMapUsage;
+    std::cout << kMapUsage << kMapBagUsage;
     return 0;
   }
   const MapperConfig mapper_config = MapperConfigFrom(args);
   SequenceRunConfig run_config = RunConfigFrom(args);
   const MapInputOptions input_options = InputOptionsFrom(args, run_config);
   if (!args.error().empty() || args.positional().size() != 1 || !args.Has("--out")) {
-    std::cerr << (args.error().empty() ? "" : args.error() + "\n") << kMapUsage;
+    std::cerr << (args.error().empty() ? "" : args.error() + "\n") << kMapUsage << kMapBagUsage;
     return 2;
   }
   std::string why;

@@ -54,15 +54,8 @@ bool OpenOpenNI2(const std::string& argument, MapInput* input, std::string* why)
 #endif
 }
 
-}  // namespace
-
-bool OpenMapInput(const std::string& argument, const MapInputOptions& options, MapInput* input,
-                  std::string* why) {
-  if (IsOpenNI2Argument(argument)) {
-    return OpenOpenNI2(argument, input, why) && AddPoses(options, input, why);
-  }
-  input->sequence = OpenSequence(argument, why);
-  if (!input->sequence) return false;
+// A random-access sequence (a folder or a bag) as the stream of the selected frames.
+bool StreamSequence(const MapInputOptions& options, MapInput* input, std::string* why) {
   if (!options.trajectory_path.empty()) {
     input->note = "--trajectory ignored: " + input->sequence->Describe() + " has its own poses";
   }
@@ -74,6 +67,49 @@ bool OpenMapInput(const std::string& argument, const MapInputOptions& options, M
   input->stream = MakeSequenceStream(*input->sequence, options.first_frame, options.max_frames);
   input->selection_applied = true;
   return true;
+}
+
+}  // namespace
+
+const char kMapBagUsage[] =
+    "  --bag-color-topic T       bag: sensor_msgs/Image colour topic (rgb8, bgr8, rgba8, bgra8)\n"
+    "  --bag-depth-topic T       bag: sensor_msgs/Image depth topic (16UC1 mm, 32FC1 m)\n"
+    "  --bag-camera-info-topic T bag: sensor_msgs/CameraInfo topic\n"
+    "  --bag-pose-topic T        bag: geometry_msgs/PoseStamped T_W_C topic instead of TF\n"
+    "  --world-frame F           bag: TF frame of the map (default: map)\n"
+    "  --camera-frame F          bag: TF frame of the camera (default: the colour frame_id)\n";
+
+std::set<std::string> MapBagFlags() {
+  return {"--bag-color-topic", "--bag-depth-topic", "--bag-camera-info-topic",
+          "--bag-pose-topic",  "--world-frame",     "--camera-frame"};
+}
+
+void BagOptionsFrom(const Arguments& args, MapInputOptions* options) {
+  options->bag_color_topic = args.Get("--bag-color-topic", "");
+  options->bag_depth_topic = args.Get("--bag-depth-topic", "");
+  options->bag_camera_info_topic = args.Get("--bag-camera-info-topic", "");
+  options->bag_pose_topic = args.Get("--bag-pose-topic", "");
+  options->world_frame = args.Get("--world-frame", "");
+  options->camera_frame = args.Get("--camera-frame", "");
+}
+
+bool OpenMapInput(const std::string& argument, const MapInputOptions& options, MapInput* input,
+                  std::string* why) {
+  if (IsOpenNI2Argument(argument)) {
+    return OpenOpenNI2(argument, input, why) && AddPoses(options, input, why);
+  }
+  if (EndsWith(argument, ".bag")) {
+#ifdef OBJMAP_CLI_WITH_ROSBAG
+    input->sequence = OpenBagInput(argument, options, why);
+#else
+    *why = argument +
+           ": ROS bags need objmap built with ROS (this one was built without it: "
+           "configure with -DOBJMAP_WITH_ROS=ON where ROS1 is installed)";
+#endif
+  } else {
+    input->sequence = OpenSequence(argument, why);
+  }
+  return input->sequence != nullptr && StreamSequence(options, input, why);
 }
 
 }  // namespace objmap::cli

@@ -2,88 +2,31 @@
 
 #include <ros/ros.h>
 
-#include <set>
-#include <type_traits>
+#include <vector>
 
+#include "ros_params.h"
 #include "server_config_fields.h"
 #include "types/coco_classes.h"
 
 namespace objmap::ros_node {
 namespace {
 
-std::string Describe(const XmlRpc::XmlRpcValue& value) {
-  XmlRpc::XmlRpcValue copy = value;
-  switch (copy.getType()) {
-    case XmlRpc::XmlRpcValue::TypeArray:
-      return "a list";
-    case XmlRpc::XmlRpcValue::TypeStruct:
-      return "a mapping";
-    default:
-      return "'" + copy.toXml() + "'";
-  }
-}
-
-template <typename T>
-const char* Expected() {
-  if constexpr (std::is_same_v<T, bool>) return "true or false";
-  if constexpr (std::is_integral_v<T>) return "an integer";
-  if constexpr (std::is_floating_point_v<T>) return "a number";
-  return "a string";
-}
-
-// One parameter value as T; integers are accepted where numbers are expected.
-template <typename T>
-bool Convert(XmlRpc::XmlRpcValue& value, T* out) {
-  const auto type = value.getType();
-  if constexpr (std::is_same_v<T, bool>) {
-    if (type != XmlRpc::XmlRpcValue::TypeBoolean) return false;
-    *out = static_cast<bool>(value);
-  } else if constexpr (std::is_integral_v<T>) {
-    if (type != XmlRpc::XmlRpcValue::TypeInt) return false;
-    *out = static_cast<T>(static_cast<int>(value));
-  } else if constexpr (std::is_floating_point_v<T>) {
-    if (type == XmlRpc::XmlRpcValue::TypeInt) {
-      *out = static_cast<T>(static_cast<int>(value));
-    } else if (type == XmlRpc::XmlRpcValue::TypeDouble) {
-      *out = static_cast<T>(static_cast<double>(value));
-    } else {
-      return false;
-    }
-  } else {
-    if (type != XmlRpc::XmlRpcValue::TypeString) return false;
-    *out = static_cast<std::string>(value);
-  }
-  return true;
-}
-
-// Reads `~key` and `~section/key` parameters, remembering every name it knows so that the
-// parameters left over can be reported as unknown. Stops at the first problem.
-class ParamReader {
+// The shared typed reader plus objmap_node's one special type: lists of COCO classes.
+class ParamReader : public ros_bridge::RosParamReader {
  public:
-  explicit ParamReader(const ros::NodeHandle& node) : node_(node) {}
+  explicit ParamReader(const ros::NodeHandle& node)
+      : RosParamReader(node,
+                       "objmap_node's parameters are listed in launch/objmap.launch and "
+                       "server/apps/objmap.example.yaml") {}
 
-  void Section(const char* name) { section_ = std::string(name) + "/"; }
-  void TopLevel() { section_.clear(); }
-
-  template <typename T>
-  void operator()(const char* key, T* value) {
-    const std::string name = section_ + key;
-    known_.insert(node_.resolveName(name));
-    XmlRpc::XmlRpcValue raw;
-    if (!ok() || !node_.getParam(name, raw)) return;
-    if (!Convert(raw, value)) {
-      error_ = "~" + name + ": expected " + Expected<T>() + ", got " + Describe(raw);
-    }
-  }
+  using RosParamReader::operator();
 
   /// COCO classes, by name ("dining table") or id, as in the YAML file.
   void operator()(const char* key, std::vector<int>* class_ids) {
-    const std::string name = section_ + key;
-    known_.insert(node_.resolveName(name));
     XmlRpc::XmlRpcValue raw;
-    if (!ok() || !node_.getParam(name, raw)) return;
+    if (!Fetch(key, &raw)) return;
     if (raw.getType() != XmlRpc::XmlRpcValue::TypeArray) {
-      error_ = "~" + name + ": expected a list of COCO class names, got " + Describe(raw);
+      Fail(key, "expected a list of COCO class names, got " + ros_bridge::DescribeParam(raw));
       return;
     }
     std::vector<int> ids;
@@ -96,41 +39,14 @@ class ParamReader {
         if (id >= kNumCocoClasses) id = -1;
       }
       if (id < 0) {
-        error_ = "~" + name + "[" + std::to_string(i) + "]: " + Describe(raw[i]) +
-                 " is not a COCO class";
+        Fail(std::string(key) + "[" + std::to_string(i) + "]",
+             ros_bridge::DescribeParam(raw[i]) + " is not a COCO class");
         return;
       }
       ids.push_back(id);
     }
     *class_ids = ids;
   }
-
-  /// After the last section: every parameter in the namespace must have been read.
-  void Finish() {
-    if (!ok()) return;
-    std::vector<std::string> names;
-    if (!ros::param::getParamNames(names)) {
-      error_ = "the parameter server's names could not be listed";
-      return;
-    }
-    const std::string prefix = node_.getNamespace() + "/";
-    for (const std::string& name : names) {
-      if (name.rfind(prefix, 0) != 0 || known_.count(name) != 0) continue;
-      error_ = "~" + name.substr(prefix.size()) +
-               ": unknown parameter (objmap_node's parameters are listed in "
-               "launch/objmap.launch and server/apps/objmap.example.yaml)";
-      return;
-    }
-  }
-
-  [[nodiscard]] bool ok() const { return error_.empty(); }
-  [[nodiscard]] const std::string& error() const { return error_; }
-
- private:
-  const ros::NodeHandle& node_;
-  std::string section_;
-  std::set<std::string> known_;
-  std::string error_;
 };
 
 void VisitNodeKeys(NodeConfig* c, ParamReader& v) {
