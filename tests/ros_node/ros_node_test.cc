@@ -20,8 +20,10 @@
 #include <iostream>
 #include <map>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <thread>
 
+#include "cli/run_objmap.h"
 #include "dataset/keyframe_selector.h"
 #include "dataset/sequence_reader.h"
 #include "integration/server_process.h"
@@ -29,6 +31,7 @@
 #include "objmap/conversions.h"
 #include "ros_conversions.h"
 #include "ros_node/ros_processes.h"
+#include "rosbag_input/test_bags.h"
 #include "test_data.h"
 
 namespace objmap {
@@ -500,6 +503,26 @@ TEST_F(RosNode, PublishedMarkersChangesAndOccupiedCells) {
   EXPECT_EQ(table_labels, static_cast<int>(tables.response.objects.size()));
   EXPECT_GE(shared().occupied_clouds.load(), kKeyframes / 10);
   EXPECT_GT(shared().last_occupied_points.load(), 10000u);
+}
+
+// The played frames written into a bag (the messages the node got, /tf included) map through
+// `objmap map` to the node's inventory.
+TEST_F(RosNode, ABagOfThePlayedFramesMapsToTheNodesInventory) {
+  const fs::path bag = shared().dir / "played.bag";
+  testing::WriteTestBag(bag.string(), shared().frames);
+  const fs::path out = shared().dir / "bag_map";
+  const testing::CommandResult run =
+      testing::RunObjmap("map " + bag.string() + " --out " + out.string() + " 2>&1");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  std::ifstream file(out / "objects.json");
+  const nlohmann::json objects = nlohmann::json::parse(file);
+  EXPECT_EQ(objects["keyframes"].get<int>(), kKeyframes);
+  Counts counts;
+  for (const auto& entry : objects["inventory"]) {
+    counts[entry["class"].get<std::string>()] = entry["count"].get<int>();
+  }
+  std::cout << "objmap map on the bag: " << Describe(counts) << std::endl;
+  EXPECT_EQ(counts, NodeInventory());
 }
 
 // Bad input after the comparisons: each is answered or logged with its reason, and the node
