@@ -347,26 +347,26 @@ sensor_msgs::PointCloud2 PointsToMsg(const ColoredPoints& points) {
   return cloud;
 }
 
-namespace {
-
-geometry_msgs::Point PointToMsg(const Eigen::Vector3f& p) {
-  geometry_msgs::Point point;
-  point.x = p.x();
-  point.y = p.y();
-  point.z = p.z();
-  return point;
+geometry_msgs::Point PointToMsg(const Eigen::Vector3d& point) {
+  geometry_msgs::Point msg;
+  msg.x = point.x();
+  msg.y = point.y();
+  msg.z = point.z();
+  return msg;
 }
 
-}  // namespace
+Eigen::Vector3d PointFromMsg(const geometry_msgs::Point& point) {
+  return {point.x, point.y, point.z};
+}
 
 void ObjectToMsg(const ObjectView& view, bool include_model, objmap_msgs::Object* object) {
   object->id = view.id;
   object->class_id = view.class_id;
   object->class_name = std::string(CocoClassName(view.class_id));
   object->confidence = view.confidence;
-  object->centroid = PointToMsg(view.centroid_W);
-  object->bounds_min = PointToMsg(view.min_W);
-  object->bounds_max = PointToMsg(view.max_W);
+  object->centroid = PointToMsg(view.centroid_W.cast<double>());
+  object->bounds_min = PointToMsg(view.min_W.cast<double>());
+  object->bounds_max = PointToMsg(view.max_W.cast<double>());
   object->observations = view.observations;
   object->keyframes.assign(view.keyframes.begin(), view.keyframes.end());
   object->scores.clear();

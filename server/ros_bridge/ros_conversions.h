@@ -4,6 +4,7 @@
 // own (encodings, buffer sizes, quaternion norms, class names) and names the bad field the way
 // the message spells it ("depth.encoding", "T_W_C.orientation").
 
+#include <geometry_msgs/Point.h>
 #include <geometry_msgs/Pose.h>
 #include <geometry_msgs/Transform.h>
 #include <objmap_msgs/Detection.h>
@@ -56,6 +57,10 @@ inline constexpr double kQuaternionNormTolerance = 1e-3;
                                     std::string* why);
 [[nodiscard]] geometry_msgs::Pose PoseToMsg(const Eigen::Isometry3d& T);
 [[nodiscard]] geometry_msgs::Transform TransformToMsg(const Eigen::Isometry3d& T);
+
+/// Points in metres.
+[[nodiscard]] geometry_msgs::Point PointToMsg(const Eigen::Vector3d& point);
+[[nodiscard]] Eigen::Vector3d PointFromMsg(const geometry_msgs::Point& point);
 
 /// A detection by class name (the name wins) or id; `field` is its path ("detections[3]").
 [[nodiscard]] bool DetectionFromMsg(const objmap_msgs::Detection& msg, const std::string& field,

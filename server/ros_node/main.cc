@@ -9,9 +9,6 @@
 #include "map_node.h"
 #include "map_server/map_server.h"
 #include "node_config.h"
-#ifdef OBJMAP_NODE_WITH_OPENNI2
-#include "openni2/openni2_source.h"
-#endif
 
 namespace {
 
@@ -19,14 +16,7 @@ namespace {
 std::unique_ptr<objmap::FrameStream> OpenCamera(const objmap::ros_node::CameraInputConfig& input,
                                                 std::string* why) {
 #ifdef OBJMAP_NODE_WITH_OPENNI2
-  objmap::OpenNI2SourceConfig config;
-  config.device_uri = input.device_uri;
-  config.oni_path = input.oni_path;
-  config.width = input.width;
-  config.height = input.height;
-  config.fps = input.fps;
-  config.depth_to_color_registration = input.depth_to_color_registration;
-  config.mirror = input.mirror;
+  const objmap::OpenNI2SourceConfig& config = input.source;
   if (!config.IsValid(why)) {
     *why = "~openni2: " + *why;
     return nullptr;

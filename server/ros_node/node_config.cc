@@ -71,13 +71,13 @@ void VisitNodeKeys(NodeConfig* c, ParamReader& v) {
   v("occupied_every_keyframes", &c->publish.occupied_every_keyframes);
   v("occupied_max_points", &c->publish.occupied_max_points);
   v.Section("openni2");
-  v("device_uri", &c->openni2.device_uri);
-  v("oni_path", &c->openni2.oni_path);
-  v("width", &c->openni2.width);
-  v("height", &c->openni2.height);
-  v("fps", &c->openni2.fps);
-  v("depth_to_color_registration", &c->openni2.depth_to_color_registration);
-  v("mirror", &c->openni2.mirror);
+  v("device_uri", &c->openni2.source.device_uri);
+  v("oni_path", &c->openni2.source.oni_path);
+  v("width", &c->openni2.source.width);
+  v("height", &c->openni2.source.height);
+  v("fps", &c->openni2.source.fps);
+  v("depth_to_color_registration", &c->openni2.source.depth_to_color_registration);
+  v("mirror", &c->openni2.source.mirror);
   v("static_camera", &c->openni2.static_camera);
 }
 

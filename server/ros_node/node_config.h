@@ -5,6 +5,8 @@
 #include <string>
 
 #include "dataset/keyframe_selector.h"
+// The config struct only: the OpenNI2 library is linked where it was found (main.cc).
+#include "openni2/openni2_source.h"
 #include "server_config.h"
 
 namespace ros {
@@ -28,16 +30,9 @@ struct PublishConfig {
 
 /// objmap_node's own OpenNI2 camera (input "openni2"), section `openni2`.
 struct CameraInputConfig {
-  /// Device URI as OpenNI2 lists it; empty: the first device found.
-  std::string device_uri;
-  /// An .oni recording played back instead of a device (every frame, none dropped).
-  std::string oni_path;
-  /// Live streams: resolution and frame rate, depth registered to colour when the device can.
-  int width = 640;
-  int height = 480;
-  int fps = 30;
-  bool depth_to_color_registration = true;
-  bool mirror = false;
+  /// Device or recording and how its streams are set up (device_uri, oni_path, width, height,
+  /// fps, depth_to_color_registration, mirror).
+  OpenNI2SourceConfig source;
   /// The camera does not move: every frame has the identity pose in world_frame and no TF is
   /// looked up (keyframes then come only from keyframes/every_nth_frame). Otherwise the pose
   /// is TF world_frame <- camera_frame at the time a frame is read.

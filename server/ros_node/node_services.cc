@@ -11,15 +11,8 @@ namespace {
 // RayCast.max_range 0 means this many metres (as in the gRPC API).
 constexpr double kDefaultRayRangeM = 10.0;
 
-Eigen::Vector3d VectorOf(const geometry_msgs::Point& point) { return {point.x, point.y, point.z}; }
-
-geometry_msgs::Point PointOf(const Eigen::Vector3d& vector) {
-  geometry_msgs::Point point;
-  point.x = vector.x();
-  point.y = vector.y();
-  point.z = vector.z();
-  return point;
-}
+using ros_bridge::PointFromMsg;
+using ros_bridge::PointToMsg;
 
 std::uint8_t VoxelStateToMsg(VoxelState state) {
   switch (state) {
@@ -74,8 +67,8 @@ bool MapNode::Impl::QueryObjects(objmap_msgs::QueryObjects::Request& request,
   }
   if (request.use_region) {
     std::string why;
-    const Eigen::Vector3d min_W = VectorOf(request.region_min);
-    const Eigen::Vector3d max_W = VectorOf(request.region_max);
+    const Eigen::Vector3d min_W = PointFromMsg(request.region_min);
+    const Eigen::Vector3d max_W = PointFromMsg(request.region_max);
     if (!ValidateBox(min_W, max_W, "region", &why)) {
       return Answer("query_objects", ServiceStatus::Invalid(why), &response);
     }
@@ -88,7 +81,7 @@ bool MapNode::Impl::QueryObjects(objmap_msgs::QueryObjects::Request& request,
                   &response);
   }
   filter.min_confidence = request.min_confidence;
-  if (request.use_nearest) filter.nearest_to = VectorOf(request.nearest_to);
+  if (request.use_nearest) filter.nearest_to = PointFromMsg(request.nearest_to);
   filter.max_results = static_cast<std::size_t>(request.max_results);
   filter.include_unconfirmed = request.include_unconfirmed;
   std::vector<std::shared_ptr<const ObjectView>> objects;
@@ -142,7 +135,7 @@ bool MapNode::Impl::QueryOccupancy(objmap_msgs::QueryOccupancy::Request& request
   }
   RegionOccupancy region;
   const ServiceStatus status = server->QueryOccupancy(
-      VectorOf(request.region_min), VectorOf(request.region_max), request.resolution,
+      PointFromMsg(request.region_min), PointFromMsg(request.region_max), request.resolution,
       request.include_voxels, static_cast<std::size_t>(request.max_voxels), &region,
       &response.map_version);
   if (status.ok()) {
@@ -154,7 +147,7 @@ bool MapNode::Impl::QueryOccupancy(objmap_msgs::QueryOccupancy::Request& request
     response.voxels.reserve(region.known_cells.size());
     for (const RegionOccupancy::Cell& cell : region.known_cells) {
       objmap_msgs::Voxel voxel;
-      voxel.center = PointOf(cell.center_W);
+      voxel.center = PointToMsg(cell.center_W);
       voxel.size = region.resolution_m;
       voxel.state = VoxelStateToMsg(cell.state);
       response.voxels.push_back(voxel);
@@ -169,7 +162,7 @@ bool MapNode::Impl::IsFree(objmap_msgs::IsFree::Request& request,
   RegionOccupancy counts;
   std::vector<ObjectId> objects;
   const ServiceStatus status =
-      server->IsFree(VectorOf(request.region_min), VectorOf(request.region_max),
+      server->IsFree(PointFromMsg(request.region_min), PointFromMsg(request.region_max),
                      request.unknown_is_free, &free, &counts, &objects, &response.map_version);
   if (status.ok()) {
     response.free = free;
@@ -187,12 +180,12 @@ bool MapNode::Impl::RayCast(objmap_msgs::RayCast::Request& request,
   ObjectId object_hit = 0;
   const Eigen::Vector3d direction(request.direction.x, request.direction.y, request.direction.z);
   const ServiceStatus status =
-      server->CastRay(VectorOf(request.origin), direction, max_range_m, request.unknown_stops, &hit,
-                      &object_hit, &response.map_version);
+      server->CastRay(PointFromMsg(request.origin), direction, max_range_m, request.unknown_stops,
+                      &hit, &object_hit, &response.map_version);
   if (status.ok()) {
     response.hit = hit.hit;
     if (hit.hit) {
-      response.hit_point = PointOf(hit.voxel_center_W);
+      response.hit_point = PointToMsg(hit.voxel_center_W);
       response.hit_state = VoxelStateToMsg(hit.state);
       response.distance = hit.distance_m;
       response.object_id = object_hit;
@@ -205,7 +198,7 @@ bool MapNode::Impl::GetOctomap(objmap_msgs::GetOctomap::Request& request,
                                objmap_msgs::GetOctomap::Response& response) {
   std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> region;
   if (request.use_region)
-    region.emplace(VectorOf(request.region_min), VectorOf(request.region_max));
+    region.emplace(PointFromMsg(request.region_min), PointFromMsg(request.region_max));
   std::string bytes;
   std::size_t leaf_count = 0;
   const ServiceStatus status =
