@@ -11,7 +11,7 @@
 #include <thread>
 
 #include "openni2/oni_file_writer.h"
-#include "ros_node/ros_processes.h"
+#include "ros_node/ros_fixture.h"
 
 namespace objmap {
 namespace {
@@ -20,45 +20,10 @@ namespace fs = std::filesystem;
 using testing::ChildProcess;
 using testing::RosMaster;
 
-class RosNodeCamera : public ::testing::Test {
+class RosNodeCamera : public testing::RosFixture {
  protected:
-  static void SetUpTestSuite() {
-    dir() = fs::temp_directory_path() / ("objmap_ros_camera_" + std::to_string(getpid()));
-    fs::remove_all(dir());
-    fs::create_directories(dir());
-    master() = std::make_unique<RosMaster>(dir().string());
-    std::string why;
-    if (!master()->Start(&why)) {
-      setup_error() = why;
-      return;
-    }
-    int argc = 0;
-    ros::init(argc, nullptr, "objmap_ros_camera_test",
-              ros::init_options::NoSigintHandler | ros::init_options::AnonymousName);
-    ros::start();
-  }
-
-  static void TearDownTestSuite() {
-    if (ros::isStarted()) ros::shutdown();
-    if (master()) master()->Stop();
-    master().reset();
-    fs::remove_all(dir());
-  }
-
-  void SetUp() override { ASSERT_TRUE(setup_error().empty()) << setup_error(); }
-
-  static fs::path& dir() {
-    static fs::path path;
-    return path;
-  }
-  static std::unique_ptr<RosMaster>& master() {
-    static std::unique_ptr<RosMaster> instance;
-    return instance;
-  }
-  static std::string& setup_error() {
-    static std::string text;
-    return text;
-  }
+  static void SetUpTestSuite() { StartRos("objmap_ros_camera"); }
+  static void TearDownTestSuite() { StopRos(); }
 
   // objmap_node with the camera input, structure only, under its own name and database.
   static std::unique_ptr<ChildProcess> StartNode(const std::string& name,
@@ -118,11 +83,7 @@ TEST_F(RosNodeCamera, PlaysARecordingIntoTheMap) {
   auto node =
       StartNode("objmap_node_oni", {"_openni2/static_camera:=true", "_openni2/oni_path:=" + path,
                                     "_keyframes/every_nth_frame:=1"});
-  bool serving = false;
-  for (int i = 0; i < 600 && !serving && node->running(); ++i) {
-    serving = ros::service::waitForService("/objmap_node_oni/status", ros::Duration(0.2));
-  }
-  ASSERT_TRUE(serving) << node->Log();
+  ASSERT_TRUE(WaitForService("/objmap_node_oni/status", node.get())) << node->Log();
   objmap_msgs::Status status;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
   while (ros::service::call("/objmap_node_oni/status", status) &&

@@ -13,7 +13,7 @@
 #include <thread>
 
 #include "ros_conversions.h"
-#include "ros_node/ros_processes.h"
+#include "ros_node/ros_fixture.h"
 
 namespace objmap {
 namespace {
@@ -37,45 +37,10 @@ RgbdFrame WallFrame(double x) {
   return frame;
 }
 
-class RosNodeInputs : public ::testing::Test {
+class RosNodeInputs : public testing::RosFixture {
  protected:
-  static void SetUpTestSuite() {
-    dir() = fs::temp_directory_path() / ("objmap_ros_inputs_" + std::to_string(getpid()));
-    fs::remove_all(dir());
-    fs::create_directories(dir());
-    master() = std::make_unique<RosMaster>(dir().string());
-    std::string why;
-    if (!master()->Start(&why)) {
-      setup_error() = why;
-      return;
-    }
-    int argc = 0;
-    ros::init(argc, nullptr, "objmap_ros_inputs_test",
-              ros::init_options::NoSigintHandler | ros::init_options::AnonymousName);
-    ros::start();
-  }
-
-  static void TearDownTestSuite() {
-    if (ros::isStarted()) ros::shutdown();
-    if (master()) master()->Stop();
-    master().reset();
-    fs::remove_all(dir());
-  }
-
-  void SetUp() override { ASSERT_TRUE(setup_error().empty()) << setup_error(); }
-
-  static fs::path& dir() {
-    static fs::path path;
-    return path;
-  }
-  static std::unique_ptr<RosMaster>& master() {
-    static std::unique_ptr<RosMaster> instance;
-    return instance;
-  }
-  static std::string& setup_error() {
-    static std::string text;
-    return text;
-  }
+  static void SetUpTestSuite() { StartRos("objmap_ros_inputs"); }
+  static void TearDownTestSuite() { StopRos(); }
 
   // objmap_node under `name` (its topics in namespace `name`), structure only unless detections
   // come on a topic; waits until it serves.
@@ -89,12 +54,7 @@ class RosNodeInputs : public ::testing::Test {
     auto node = std::make_unique<ChildProcess>(argv, (dir() / (name + ".log")).string());
     std::string why;
     EXPECT_TRUE(node->Start(&why)) << why;
-    bool serving = false;
-    for (int i = 0; i < 600 && !serving && node->running(); ++i) {
-      serving =
-          ros::service::waitForService("/" + name + "/" + name + "/status", ros::Duration(0.2));
-    }
-    EXPECT_TRUE(serving) << node->Log();
+    EXPECT_TRUE(WaitForService("/" + name + "/" + name + "/status", node.get())) << node->Log();
     return node;
   }
 
