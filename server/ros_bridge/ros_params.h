@@ -14,10 +14,20 @@ namespace objmap::ros_bridge {
 /// "'high'", "3", "true", "a list": a parameter value as an error message shows it.
 [[nodiscard]] std::string DescribeParam(const XmlRpc::XmlRpcValue& value);
 
+/// What a value of type T must look like, for messages ("expected a number, got 'high'").
+template <typename T>
+const char* ExpectedValue() {
+  if constexpr (std::is_same_v<T, bool>) return "true or false";
+  if constexpr (std::is_integral_v<T>) return "an integer";
+  if constexpr (std::is_floating_point_v<T>) return "a number";
+  return "a string";
+}
+
 /// Reads `~key` and `~section/key` parameters over config fields; a field keeps its default when
 /// its parameter is not set. Every name read is remembered so that Finish() reports the
 /// parameters left over: a misspelt key is an error, not a silent default. Stops at the first
 /// problem. Used as the visitor of a config's key list (`v("rate", &config.rate_hz)`).
+
 /// Thread-safety: one thread.
 class RosParamReader {
  public:
@@ -35,7 +45,7 @@ class RosParamReader {
     XmlRpc::XmlRpcValue raw;
     if (!Fetch(key, &raw)) return;
     if (!Convert(raw, value)) {
-      Fail(key, std::string("expected ") + Expected<T>() + ", got " + DescribeParam(raw));
+      Fail(key, std::string("expected ") + ExpectedValue<T>() + ", got " + DescribeParam(raw));
     }
   }
 
@@ -53,14 +63,6 @@ class RosParamReader {
   void Fail(const std::string& key, const std::string& problem);
 
  private:
-  template <typename T>
-  static const char* Expected() {
-    if constexpr (std::is_same_v<T, bool>) return "true or false";
-    if constexpr (std::is_integral_v<T>) return "an integer";
-    if constexpr (std::is_floating_point_v<T>) return "a number";
-    return "a string";
-  }
-
   template <typename T>
   static bool Convert(XmlRpc::XmlRpcValue& value, T* out) {
     const auto type = value.getType();

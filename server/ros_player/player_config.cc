@@ -52,7 +52,8 @@ class CommandLineReader {
     const auto found = values_.find(flag);
     if (!error_.empty() || found == values_.end()) return;
     if (!Convert(found->second, value)) {
-      error_ = flag + ": expected " + Expected<T>() + ", got '" + found->second + "'";
+      error_ =
+          flag + ": expected " + ros_bridge::ExpectedValue<T>() + ", got '" + found->second + "'";
     }
   }
 
@@ -69,14 +70,6 @@ class CommandLineReader {
   [[nodiscard]] const std::string& error() const { return error_; }
 
  private:
-  template <typename T>
-  static const char* Expected() {
-    if constexpr (std::is_same_v<T, bool>) return "true or false";
-    if constexpr (std::is_integral_v<T>) return "an integer";
-    if constexpr (std::is_floating_point_v<T>) return "a number";
-    return "a string";
-  }
-
   template <typename T>
   static bool Convert(const std::string& text, T* out) {
     char* end = nullptr;
