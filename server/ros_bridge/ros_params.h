@@ -27,7 +27,6 @@ const char* ExpectedValue() {
 /// its parameter is not set. Every name read is remembered so that Finish() reports the
 /// parameters left over: a misspelt key is an error, not a silent default. Stops at the first
 /// problem. Used as the visitor of a config's key list (`v("rate", &config.rate_hz)`).
-
 /// Thread-safety: one thread.
 class RosParamReader {
  public:
