@@ -43,6 +43,9 @@ if [[ -x "${BENCH}/segmentation_bench" && -d "${MOSD}" ]]; then
   run segmentation "${BENCH}/segmentation_bench" "${MOSD}" "${SEQUENCE}" 10 50 3 \
     "${ROOT}/models/centernet_coco.pb" 3
 fi
+if [[ -x "${BENCH}/ros_input_bench" ]]; then  # builds with ROS
+  run ros_input "${BENCH}/ros_input_bench" "${SEQUENCE}" 100 20
+fi
 
 # The whole pipeline on the sequence: wall time and per-stage medians per keyframe.
 echo "== pipeline: objmap map ${SEQUENCE}"
@@ -71,5 +74,8 @@ grep -h -i -e 'ratio' -e 'per pair' "${OUT}/association.txt" | head -8 || true
 grep -h -i -e 'ratio' -e 'median' "${OUT}/stages.txt" | head -6 || true
 if [[ -f "${OUT}/segmentation.txt" ]]; then
   grep -h -i -e 'ratio' -e 'median' -e 'segmentation' "${OUT}/segmentation.txt" | head -10 || true
+fi
+if [[ -f "${OUT}/ros_input.txt" ]]; then
+  grep -h -e 'FrameFromMsgs' -e 'memcpy' -e 'ReadFrame' "${OUT}/ros_input.txt" || true
 fi
 tail -1 "${OUT}/pipeline.txt"
