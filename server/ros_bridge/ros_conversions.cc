@@ -315,6 +315,23 @@ sensor_msgs::CameraInfo IntrinsicsToMsg(const CameraIntrinsics& intrinsics) {
   return info;
 }
 
+FrameMessages FrameToMsgs(const RgbdFrame& frame, const ros::Time& stamp,
+                          const std::string& world_frame, const std::string& camera_frame) {
+  FrameMessages m;
+  m.color = ColorToMsg(frame.color);
+  m.depth = DepthToMsgMillimetres(frame.depth);
+  m.camera_info = IntrinsicsToMsg(frame.intrinsics);
+  for (std_msgs::Header* header : {&m.color.header, &m.depth.header, &m.camera_info.header}) {
+    header->stamp = stamp;
+    header->frame_id = camera_frame;
+  }
+  m.T_W_C.header.stamp = stamp;
+  m.T_W_C.header.frame_id = world_frame;
+  m.T_W_C.child_frame_id = camera_frame;
+  m.T_W_C.transform = TransformToMsg(frame.T_W_C);
+  return m;
+}
+
 sensor_msgs::PointCloud2 PointsToMsg(const ColoredPoints& points) {
   sensor_msgs::PointCloud2 cloud;
   cloud.height = 1;

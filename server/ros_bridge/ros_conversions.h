@@ -7,6 +7,7 @@
 #include <geometry_msgs/Point.h>
 #include <geometry_msgs/Pose.h>
 #include <geometry_msgs/Transform.h>
+#include <geometry_msgs/TransformStamped.h>
 #include <objmap_msgs/Detection.h>
 #include <objmap_msgs/InventoryEntry.h>
 #include <objmap_msgs/MapChange.h>
@@ -72,6 +73,18 @@ inline constexpr double kQuaternionNormTolerance = 1e-3;
 [[nodiscard]] sensor_msgs::Image ColorToMsg(const ColorImage& color);
 [[nodiscard]] sensor_msgs::Image DepthToMsgMillimetres(const DepthImage& depth);
 [[nodiscard]] sensor_msgs::CameraInfo IntrinsicsToMsg(const CameraIntrinsics& intrinsics);
+
+/// One frame as a camera driver publishes it, every message stamped `stamp`: the images and
+/// camera info in `camera_frame`, and T_W_C as the transform world_frame -> camera_frame.
+struct FrameMessages {
+  sensor_msgs::Image color;  ///< rgb8
+  sensor_msgs::Image depth;  ///< 16UC1, millimetres
+  sensor_msgs::CameraInfo camera_info;
+  geometry_msgs::TransformStamped T_W_C;
+};
+[[nodiscard]] FrameMessages FrameToMsgs(const RgbdFrame& frame, const ros::Time& stamp,
+                                        const std::string& world_frame,
+                                        const std::string& camera_frame);
 
 /// A coloured point set as PointCloud2 (x y z float32 and rgb packed in a float32, as PCL
 /// writes it), unorganized (height 1).

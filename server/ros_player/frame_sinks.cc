@@ -160,23 +160,6 @@ class TopicSink : public FrameSink {
 
 }  // namespace
 
-FrameMessages MakeFrameMessages(const RgbdFrame& frame, const ros::Time& stamp,
-                                const PlayerConfig& config) {
-  FrameMessages m;
-  m.color = ros_bridge::ColorToMsg(frame.color);
-  m.depth = ros_bridge::DepthToMsgMillimetres(frame.depth);
-  m.camera_info = ros_bridge::IntrinsicsToMsg(frame.intrinsics);
-  for (std_msgs::Header* header : {&m.color.header, &m.depth.header, &m.camera_info.header}) {
-    header->stamp = stamp;
-    header->frame_id = config.camera_frame;
-  }
-  m.T_W_C.header.stamp = stamp;
-  m.T_W_C.header.frame_id = config.world_frame;
-  m.T_W_C.child_frame_id = config.camera_frame;
-  m.T_W_C.transform = ros_bridge::TransformToMsg(frame.T_W_C);
-  return m;
-}
-
 std::unique_ptr<FrameSink> MakeBagSink(const PlayerConfig& config, std::string* why) {
   auto bag = std::make_unique<rosbag::Bag>();
   try {

@@ -1,6 +1,6 @@
 #pragma once
 // Where objmap_dataset_player sends each frame: live topics (optionally in step with
-// objmap_node) or a bag file. Both get the same messages, built by MakeFrameMessages.
+// objmap_node) or a bag file. Both get the same messages, built by ros_bridge::FrameToMsgs.
 
 #include <geometry_msgs/TransformStamped.h>
 #include <ros/node_handle.h>
@@ -13,20 +13,12 @@
 #include <string>
 
 #include "player_config.h"
+#include "ros_conversions.h"
 #include "types/frame.h"
 
 namespace objmap::ros_player {
 
-/// One frame as ROS messages, all stamped alike; the images in camera_frame.
-struct FrameMessages {
-  sensor_msgs::Image color;  ///< rgb8
-  sensor_msgs::Image depth;  ///< 16UC1, millimetres
-  sensor_msgs::CameraInfo camera_info;
-  geometry_msgs::TransformStamped T_W_C;  ///< world_frame -> camera_frame
-};
-
-[[nodiscard]] FrameMessages MakeFrameMessages(const RgbdFrame& frame, const ros::Time& stamp,
-                                              const PlayerConfig& config);
+using ros_bridge::FrameMessages;
 
 /// Receives the frames in order. Thread-safety: one thread.
 class FrameSink {

@@ -71,7 +71,9 @@ int Play(const SequenceReader& reader, const PlayerConfig& config, FrameSink* si
         ROS_WARN_STREAM("objmap_dataset_player: skipped frame " << index << ": " << why);
         continue;
       }
-      if (!sink->Send(MakeFrameMessages(frame, stamper.StampOf(frame), config), &why)) {
+      if (!sink->Send(ros_bridge::FrameToMsgs(frame, stamper.StampOf(frame), config.world_frame,
+                                              config.camera_frame),
+                      &why)) {
         ROS_ERROR_STREAM("objmap_dataset_player: frame " << index << ": " << why);
         return 1;
       }

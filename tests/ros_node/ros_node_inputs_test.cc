@@ -101,20 +101,15 @@ TEST_F(RosNodeInputs, PoseTopicAndApproximatePairing) {
   for (int i = 0; i < kFrames; ++i) {
     const RgbdFrame frame = WallFrame(0.2 * i);
     const ros::Time stamp(50.0 + 0.1 * i);
+    ros_bridge::FrameMessages m = ros_bridge::FrameToMsgs(frame, stamp, "map", "camera");
+    m.depth.header.stamp += ros::Duration(0.005);
     geometry_msgs::PoseStamped pose;
-    pose.header.stamp = stamp;
-    pose.header.frame_id = "map";
+    pose.header = m.T_W_C.header;
     pose.pose = ros_bridge::PoseToMsg(frame.T_W_C);
     pose_pub.publish(pose);
-    sensor_msgs::Image color = ros_bridge::ColorToMsg(frame.color);
-    sensor_msgs::Image depth = ros_bridge::DepthToMsgMillimetres(frame.depth);
-    sensor_msgs::CameraInfo info = ros_bridge::IntrinsicsToMsg(frame.intrinsics);
-    color.header.stamp = info.header.stamp = stamp;
-    depth.header.stamp = stamp + ros::Duration(0.005);
-    color.header.frame_id = depth.header.frame_id = info.header.frame_id = "camera";
-    info_pub.publish(info);
-    color_pub.publish(color);
-    depth_pub.publish(depth);
+    info_pub.publish(m.camera_info);
+    color_pub.publish(m.color);
+    depth_pub.publish(m.depth);
     std::this_thread::sleep_for(std::chrono::milliseconds(300));
   }
   const objmap_msgs::Status::Response status = WaitForFrames(name, kFrames - 1);
@@ -143,13 +138,9 @@ TEST_F(RosNodeInputs, DetectionsTopic) {
   for (std::size_t i = 0; i < classes.size(); ++i) {
     const RgbdFrame frame = WallFrame(0.2 * static_cast<double>(i));
     const ros::Time stamp(70.0 + 0.1 * static_cast<double>(i));
-    geometry_msgs::TransformStamped transform;
-    transform.header.stamp = stamp;
-    transform.header.frame_id = "map";
-    transform.child_frame_id = "camera";
-    transform.transform = ros_bridge::TransformToMsg(frame.T_W_C);
+    const ros_bridge::FrameMessages m = ros_bridge::FrameToMsgs(frame, stamp, "map", "camera");
     tf2_msgs::TFMessage tf;
-    tf.transforms.push_back(transform);
+    tf.transforms.push_back(m.T_W_C);
     tf_pub.publish(tf);
     objmap_msgs::DetectionArray detections;
     detections.header.stamp = stamp;
@@ -161,14 +152,10 @@ TEST_F(RosNodeInputs, DetectionsTopic) {
     detection.class_name = classes[i];
     detection.score = 0.9f;
     detections.detections.push_back(detection);
-    sensor_msgs::Image color = ros_bridge::ColorToMsg(frame.color);
-    sensor_msgs::Image depth = ros_bridge::DepthToMsgMillimetres(frame.depth);
-    sensor_msgs::CameraInfo info = ros_bridge::IntrinsicsToMsg(frame.intrinsics);
-    color.header.stamp = depth.header.stamp = info.header.stamp = stamp;
     detections_pub.publish(detections);
-    info_pub.publish(info);
-    depth_pub.publish(depth);
-    color_pub.publish(color);
+    info_pub.publish(m.camera_info);
+    depth_pub.publish(m.depth);
+    color_pub.publish(m.color);
     WaitForFrames(name, static_cast<long long>(i) + 1);
   }
   const objmap_msgs::Status::Response status = Status(name);

@@ -174,7 +174,7 @@ class RosNode : public ::testing::Test {
     });
     bool played = true;
     for (const RgbdFrame& frame : s.frames) {
-      if (!PlayAndWait(frame, ColorOf(frame), why)) {
+      if (!PlayAndWait(frame, why)) {
         played = false;
         break;
       }
@@ -255,10 +255,6 @@ class RosNode : public ::testing::Test {
     return true;
   }
 
-  static sensor_msgs::Image ColorOf(const RgbdFrame& frame) {
-    return ros_bridge::ColorToMsg(frame.color);
-  }
-
   // Status over one persistent connection: the player polls it between frames, and a new TCP
   // connection per poll would pile up sockets in TIME_WAIT.
   static objmap_msgs::Status::Response NodeStatus() {
@@ -277,34 +273,31 @@ class RosNode : public ::testing::Test {
     return status.response;
   }
 
-  // Publishes one frame (TF first, then camera info, depth and `color`, all with one stamp) and
-  // waits until the node has handled it, whatever the outcome.
-  static bool PlayAndWait(const RgbdFrame& frame, sensor_msgs::Image color, std::string* why,
+  // Publishes one frame (TF first, then camera info, depth and colour, all with one stamp) and
+  // waits until the node has handled it, whatever the outcome. `color_instead` replaces the
+  // frame's colour image (bad input).
+  static bool PlayAndWait(const RgbdFrame& frame, std::string* why,
+                          const sensor_msgs::Image* color_instead = nullptr,
                           const std::string& camera_frame = kCameraFrame,
                           bool send_transform = true) {
     Shared& s = shared();
     const long long handled_before = NodeStatus().frames_received;
     const ros::Time stamp(s.next_stamp_s);
     s.next_stamp_s += 0.2;
-    std_msgs::Header header;
-    header.stamp = stamp;
-    header.frame_id = camera_frame;
+    ros_bridge::FrameMessages m = ros_bridge::FrameToMsgs(frame, stamp, "map", camera_frame);
+    if (color_instead != nullptr) {
+      const std_msgs::Header header = m.color.header;
+      m.color = *color_instead;
+      m.color.header = header;
+    }
     if (send_transform) {
-      geometry_msgs::TransformStamped transform;
-      transform.header.stamp = stamp;
-      transform.header.frame_id = "map";
-      transform.child_frame_id = camera_frame;
-      transform.transform = ros_bridge::TransformToMsg(frame.T_W_C);
       tf2_msgs::TFMessage tf;
-      tf.transforms.push_back(transform);
+      tf.transforms.push_back(m.T_W_C);
       s.tf_pub.publish(tf);
     }
-    sensor_msgs::CameraInfo info = ros_bridge::IntrinsicsToMsg(frame.intrinsics);
-    sensor_msgs::Image depth = ros_bridge::DepthToMsgMillimetres(frame.depth);
-    info.header = depth.header = color.header = header;
-    s.info_pub.publish(info);
-    s.depth_pub.publish(depth);
-    s.color_pub.publish(color);
+    s.info_pub.publish(m.camera_info);
+    s.depth_pub.publish(m.depth);
+    s.color_pub.publish(m.color);
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
     while (NodeStatus().frames_received <= handled_before) {
       if (std::chrono::steady_clock::now() > deadline) {
@@ -537,7 +530,7 @@ TEST_F(RosNode, MismatchedImageSizesAreRejectedWithTheReason) {
   small.step = 320 * 3;
   small.data.resize(320 * 240 * 3);
   std::string why;
-  ASSERT_TRUE(PlayAndWait(frame, small, &why)) << why;
+  ASSERT_TRUE(PlayAndWait(frame, &why, &small)) << why;
   const objmap_msgs::Status::Response after = NodeStatus();
   EXPECT_EQ(after.frames_rejected, before.frames_rejected + 1);
   EXPECT_EQ(after.keyframes, before.keyframes);
@@ -549,7 +542,7 @@ TEST_F(RosNode, MismatchedImageSizesAreRejectedWithTheReason) {
 TEST_F(RosNode, AFrameWithoutTransformIsRejectedWithTheReason) {
   const objmap_msgs::Status::Response before = NodeStatus();
   std::string why;
-  ASSERT_TRUE(PlayAndWait(shared().frames.back(), ColorOf(shared().frames.back()), &why,
+  ASSERT_TRUE(PlayAndWait(shared().frames.back(), &why, /*color_instead=*/nullptr,
                           "camera_without_tf", /*send_transform=*/false))
       << why;
   const objmap_msgs::Status::Response after = NodeStatus();

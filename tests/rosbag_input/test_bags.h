@@ -31,33 +31,24 @@ inline void WriteTestBag(const std::string& path, const std::vector<RgbdFrame>& 
                          const TestBagOptions& options = {}) {
   rosbag::Bag bag(path, rosbag::bagmode::Write);
   for (std::size_t k = 0; k < frames.size(); ++k) {
-    const RgbdFrame& frame = frames[k];
     const ros::Time stamp(100.0 + 0.1 * static_cast<double>(k));
-    sensor_msgs::Image color = ros_bridge::ColorToMsg(frame.color);
-    sensor_msgs::Image depth = ros_bridge::DepthToMsgMillimetres(frame.depth);
-    sensor_msgs::CameraInfo info = ros_bridge::IntrinsicsToMsg(frame.intrinsics);
-    color.header.stamp = info.header.stamp = stamp;
-    depth.header.stamp = stamp + ros::Duration(options.depth_delay_s);
-    color.header.frame_id = depth.header.frame_id = info.header.frame_id = options.camera_frame;
-    geometry_msgs::TransformStamped transform;
-    transform.header.stamp = stamp;
-    transform.header.frame_id = "map";
-    transform.child_frame_id = options.camera_frame;
-    transform.transform = ros_bridge::TransformToMsg(frame.T_W_C);
+    ros_bridge::FrameMessages m =
+        ros_bridge::FrameToMsgs(frames[k], stamp, "map", options.camera_frame);
+    m.depth.header.stamp += ros::Duration(options.depth_delay_s);
     if (options.write_tf && k < options.frames_with_tf) {
       tf2_msgs::TFMessage tf;
-      tf.transforms.push_back(transform);
+      tf.transforms.push_back(m.T_W_C);
       bag.write("/tf", stamp, tf);
     }
     if (!options.pose_topic.empty()) {
       geometry_msgs::PoseStamped pose;
-      pose.header = transform.header;
-      pose.pose = ros_bridge::PoseToMsg(frame.T_W_C);
+      pose.header = m.T_W_C.header;
+      pose.pose = ros_bridge::PoseToMsg(frames[k].T_W_C);
       bag.write(options.pose_topic, stamp, pose);
     }
-    bag.write(options.camera_info_topic, stamp, info);
-    bag.write(options.color_topic, stamp, color);
-    bag.write(options.depth_topic, depth.header.stamp, depth);
+    bag.write(options.camera_info_topic, stamp, m.camera_info);
+    bag.write(options.color_topic, stamp, m.color);
+    bag.write(options.depth_topic, m.depth.header.stamp, m.depth);
   }
   bag.close();
 }
