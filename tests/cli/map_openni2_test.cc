@@ -30,15 +30,9 @@ class MapOpenNI2 : public ::testing::Test {
 
   // A recording of `count` frames 1/30 s apart (first at 1/30 s): a wall 1.5 m away.
   void WriteRecording(const std::string& name, int count) const {
-    testing::OniTestRecording recording;
-    for (int i = 0; i < count; ++i) {
-      testing::OniTestFrame frame;
-      frame.timestamp_us = 33333u * (i + 1);
-      frame.depth_mm.assign(recording.width * recording.height, 1500);
-      frame.rgb.assign(recording.width * recording.height * 3, 90);
-      recording.frames.push_back(frame);
-    }
-    ASSERT_TRUE(testing::WriteOniFile(Path(name), recording));
+    const testing::OniTestRecording size;  // the writer's default frame size
+    ASSERT_TRUE(testing::WriteOniFile(
+        Path(name), testing::WallRecording(count, size.width, size.height, 1500, 90)));
   }
 
   fs::path dir_;

@@ -131,6 +131,23 @@ inline void WriteNode(std::ofstream& out, std::uint32_t node, bool is_depth,
 
 }  // namespace oni_detail
 
+/// `count` frames 1/30 s apart (the first at 1/30 s) of a camera facing a flat wall
+/// `depth_mm` away, every colour pixel grey `gray`.
+inline OniTestRecording WallRecording(int count, int width, int height, std::uint16_t depth_mm,
+                                      std::uint8_t gray) {
+  OniTestRecording recording;
+  recording.width = width;
+  recording.height = height;
+  for (int i = 0; i < count; ++i) {
+    OniTestFrame frame;
+    frame.timestamp_us = 33333u * static_cast<std::uint64_t>(i + 1);
+    frame.depth_mm.assign(static_cast<std::size_t>(width) * height, depth_mm);
+    frame.rgb.assign(static_cast<std::size_t>(width) * height * 3, gray);
+    recording.frames.push_back(frame);
+  }
+  return recording;
+}
+
 /// Writes `recording` to `path`; false when the file cannot be written.
 inline bool WriteOniFile(const std::string& path, const OniTestRecording& recording) {
   using namespace oni_detail;

@@ -67,19 +67,9 @@ TEST_F(RosNodeCamera, AMovingCameraNeedsItsTfFrame) {
 
 TEST_F(RosNodeCamera, PlaysARecordingIntoTheMap) {
   // A static camera 1.5 m in front of a flat wall, six frames.
-  testing::OniTestRecording recording;
-  recording.width = 160;
-  recording.height = 120;
   constexpr int kFrames = 6;
-  for (int i = 0; i < kFrames; ++i) {
-    testing::OniTestFrame frame;
-    frame.timestamp_us = 33333u * (i + 1);
-    frame.depth_mm.assign(recording.width * recording.height, 1500);
-    frame.rgb.assign(recording.width * recording.height * 3, 128);
-    recording.frames.push_back(frame);
-  }
   const std::string path = (dir() / "wall.oni").string();
-  ASSERT_TRUE(testing::WriteOniFile(path, recording));
+  ASSERT_TRUE(testing::WriteOniFile(path, testing::WallRecording(kFrames, 160, 120, 1500, 128)));
   auto node =
       StartNode("objmap_node_oni", {"_openni2/static_camera:=true", "_openni2/oni_path:=" + path,
                                     "_keyframes/every_nth_frame:=1"});
@@ -116,18 +106,8 @@ TEST_F(RosNodeCamera, PlaysARecordingIntoTheMap) {
 
 // launch/objmap_openni2.launch with a recording and a static camera serves the map it makes.
 TEST_F(RosNodeCamera, OpenNI2LaunchPlaysARecording) {
-  testing::OniTestRecording recording;
-  recording.width = 160;
-  recording.height = 120;
-  for (int i = 0; i < 3; ++i) {
-    testing::OniTestFrame frame;
-    frame.timestamp_us = 33333u * (i + 1);
-    frame.depth_mm.assign(recording.width * recording.height, 1200);
-    frame.rgb.assign(recording.width * recording.height * 3, 90);
-    recording.frames.push_back(frame);
-  }
   const std::string path = (dir() / "launched.oni").string();
-  ASSERT_TRUE(testing::WriteOniFile(path, recording));
+  ASSERT_TRUE(testing::WriteOniFile(path, testing::WallRecording(3, 160, 120, 1200, 90)));
   setenv("ROS_PACKAGE_PATH", (std::string(OBJMAP_SOURCE_DIR) + ":/usr/share").c_str(), 1);
   setenv("CMAKE_PREFIX_PATH", OBJMAP_DEVEL_DIR, 1);
   ChildProcess launch(
