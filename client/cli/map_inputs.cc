@@ -59,14 +59,10 @@ bool StreamSequence(const MapInputOptions& options, MapInput* input, std::string
   if (!options.trajectory_path.empty()) {
     input->note = "--trajectory ignored: " + input->sequence->Describe() + " has its own poses";
   }
-  if (options.first_frame >= input->sequence->size()) {
-    *why = "no frames selected: first frame " + std::to_string(options.first_frame) + " of " +
-           std::to_string(input->sequence->size());
-    return false;
-  }
-  input->stream = MakeSequenceStream(*input->sequence, options.first_frame, options.max_frames);
+  input->stream =
+      SelectSequenceFrames(*input->sequence, options.first_frame, options.max_frames, why);
   input->selection_applied = true;
-  return true;
+  return input->stream != nullptr;
 }
 
 }  // namespace

@@ -42,4 +42,15 @@ std::unique_ptr<FrameStream> MakeSequenceStream(const SequenceReader& reader,
   return std::make_unique<SequenceStream>(reader, first_frame, end);
 }
 
+std::unique_ptr<FrameStream> SelectSequenceFrames(const SequenceReader& reader,
+                                                  std::size_t first_frame, std::size_t max_frames,
+                                                  std::string* why) {
+  if (first_frame >= reader.size()) {
+    *why = "no frames selected: first frame " + std::to_string(first_frame) + " of " +
+           std::to_string(reader.size());
+    return nullptr;
+  }
+  return MakeSequenceStream(reader, first_frame, max_frames);
+}
+
 }  // namespace objmap

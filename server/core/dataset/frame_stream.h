@@ -42,4 +42,11 @@ class FrameStream {
                                                               std::size_t first_frame = 0,
                                                               std::size_t max_frames = 0);
 
+/// MakeSequenceStream for a selection that must hold a frame: nullptr and "no frames selected:
+/// first frame F of N" when first_frame is not a frame of `reader`.
+[[nodiscard]] std::unique_ptr<FrameStream> SelectSequenceFrames(const SequenceReader& reader,
+                                                                std::size_t first_frame,
+                                                                std::size_t max_frames,
+                                                                std::string* why);
+
 }  // namespace objmap

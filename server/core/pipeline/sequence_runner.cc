@@ -95,13 +95,9 @@ bool RunSequence(const SequenceReader& reader, Detector* detector, Mapper* mappe
                  const SequenceRunConfig& config, const ProgressCallback& progress,
                  SequenceRunReport* report, std::string* why) {
   if (!config.IsValid(why)) return false;
-  if (config.first_frame >= reader.size()) {
-    *why = "no frames selected: first frame " + std::to_string(config.first_frame) + " of " +
-           std::to_string(reader.size());
-    return false;
-  }
   // The selection is applied by random access here, not by reading and dropping frames.
-  const auto stream = MakeSequenceStream(reader, config.first_frame, config.max_frames);
+  const auto stream = SelectSequenceFrames(reader, config.first_frame, config.max_frames, why);
+  if (!stream) return false;
   SequenceRunConfig stream_config = config;
   stream_config.first_frame = 0;
   stream_config.max_frames = 0;
