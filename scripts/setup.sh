@@ -23,6 +23,9 @@ readonly PACKAGES=(
   catkin ros-message-generation ros-message-runtime python3-genmsg python3-gencpp
   libroscpp-dev librosbag-dev libmessage-filters-dev libtf2-dev libtf2-ros-dev libtf2-msgs-dev
   libstd-msgs-dev libgeometry-msgs-dev libsensor-msgs-dev libvisualization-msgs-dev
+  # The .msg definitions that objmap_msgs' generation reads (the lib*-msgs-dev packages above hold
+  # only the generated C++ headers).
+  ros-std-msgs ros-geometry-msgs ros-sensor-msgs
   python3-rosmaster python3-roslaunch
 )
 # Packages needed only for a command they provide: a machine may have that command from elsewhere

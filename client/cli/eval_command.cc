@@ -22,6 +22,8 @@ namespace objmap::cli {
 namespace {
 
 constexpr char kEvalUsage[] =
+    "objmap eval: scores a map (a map folder or a running server) against ground-truth objects\n"
+    "or inventory counts.\n"
     "usage: objmap eval <map-dir | ADDR> (--gt ground_truth.json | --inventory counts.json)\n"
     "  <map-dir>                 folder written by `objmap map --out` or `objmap export\n"
     "                            --objects` (objects.json and the .ply models)\n"

@@ -15,6 +15,7 @@ namespace objmap::cli {
 namespace {
 
 constexpr char kExportUsage[] =
+    "objmap export: writes a running server's OctoMap (.bt) and object models (.ply) to files.\n"
     "usage: objmap export [--octomap FILE.bt] [--objects DIR] [options]\n"
     "  --octomap FILE            write the OctoMap (standard .bt) to FILE\n"
     "  --objects DIR             write DIR/<id>_<class>.ply (binary PLY, xyz + rgb, map frame)\n"

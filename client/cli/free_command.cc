@@ -9,6 +9,7 @@ namespace objmap::cli {
 namespace {
 
 constexpr char kFreeUsage[] =
+    "objmap free: asks a running server whether a box is free space (exit 0) or not (exit 3).\n"
     "usage: objmap free X0 Y0 Z0 X1 Y1 Z1 [options]\n"
     "  X0 Y0 Z0 X1 Y1 Z1         the box's min and max corners in the map frame, metres\n"
     "  --unknown-is-free         unknown space counts as free (default: it does not)\n"

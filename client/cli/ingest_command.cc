@@ -16,6 +16,7 @@ namespace objmap::cli {
 namespace {
 
 constexpr char kIngestUsage[] =
+    "objmap ingest: streams a recorded sequence's keyframes to a running server.\n"
     "usage: objmap ingest <dataset> [options]\n"
     "  <dataset>                 7-Scenes folder (frame-NNNNNN.*) or TUM RGB-D folder\n"
     "  --detections FILE         send the detections of this file (as written by `objmap map\n"

@@ -9,6 +9,7 @@ namespace objmap::cli {
 namespace {
 
 constexpr char kInventoryUsage[] =
+    "objmap inventory: prints a running server's objects per class.\n"
     "usage: objmap inventory [options]\n"
     "  --since VERSION           only classes with an object added, changed or removed after\n"
     "                            this map version (a class whose last object went shows count 0)\n"

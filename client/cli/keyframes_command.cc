@@ -14,6 +14,7 @@ namespace objmap::cli {
 namespace {
 
 constexpr char kKeyframesUsage[] =
+    "objmap keyframes: lists a running server's keyframes and their current poses.\n"
     "usage: objmap keyframes [options]\n"
     "  --first-id N              keyframes with id >= N (default: all)\n"
     "  --limit N                 at most N keyframes (default: all)\n"

@@ -5,14 +5,16 @@
 #include <string>
 
 #include "commands.h"
+#include "config/build_info.h"
 
 namespace {
 
 using Command = int (*)(int, char**);
 
-void PrintUsage() {
-  std::cerr
-      << "usage:\n"
+void PrintUsage(std::ostream& out) {
+  out << "objmap: object-oriented semantic maps (what is where) from RGB-D keyframes: maps\n"
+         "sequences locally, and queries and feeds a running objmap_server.\n"
+         "usage:\n"
          "  objmap map <dataset> --out <dir> [options]   map an RGB-D sequence\n"
          "  objmap segment <organized.pcd> --out <labelled.pcd>   segment one cloud\n"
          "  objmap eval <map-dir> --gt ground_truth.json | --inventory counts.json\n"
@@ -28,6 +30,7 @@ void PrintUsage() {
          "  objmap keyframes [--out poses.txt]           keyframe poses (update-poses format)\n"
          "  objmap status                                map version, counts, queue\n"
 #endif
+         "  objmap --version                             version and the build's options\n"
          "run `objmap <command> --help` for the options of a command\n";
 }
 
@@ -53,9 +56,17 @@ const std::map<std::string, Command>& Commands() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0) {
-    PrintUsage();
-    return argc < 2 ? 2 : 0;
+  if (argc < 2) {
+    PrintUsage(std::cerr);
+    return 2;
+  }
+  if (std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0) {
+    PrintUsage(std::cout);
+    return 0;
+  }
+  if (std::strcmp(argv[1], "--version") == 0) {
+    std::cout << objmap::BuildDescription();
+    return 0;
   }
   const std::string command = argv[1];
   const auto it = Commands().find(command);
@@ -65,6 +76,6 @@ int main(int argc, char** argv) {
   std::cerr << " (this build has no server commands: configure with OBJMAP_WITH_GRPC=ON)";
 #endif
   std::cerr << "\n";
-  PrintUsage();
+  PrintUsage(std::cerr);
   return 2;
 }

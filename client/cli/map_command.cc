@@ -13,8 +13,10 @@
 
 #include "arguments.h"
 #include "commands.h"
+#include "config/objmap_config.h"
 #include "detection/centernet_detector.h"
 #include "detection/detections_file.h"
+#include "detection/model_location.h"
 #include "map_inputs.h"
 #include "mapper/map_export.h"
 #include "pipeline/sequence_runner.h"
@@ -26,7 +28,10 @@ namespace objmap::cli {
 namespace {
 
 constexpr char kMapUsage[] =
+    "objmap map: builds an object map (OctoMap + objects with classes) from an RGB-D sequence,\n"
+    "recording or live camera, locally, without a server.\n"
     "usage: objmap map <input> --out <dir> [options]\n"
+    "       objmap map --print-config [--config FILE] [--set SECTION.KEY=V ...]\n"
     "  <input>                   7-Scenes folder (frame-NNNNNN.*) or TUM RGB-D folder;\n"
     "                            openni2 | openni2:<device-uri>: a live OpenNI2 camera (runs\n"
     "                            until --max-frames or Ctrl-C, then writes the map);\n"
@@ -34,11 +39,19 @@ constexpr char kMapUsage[] =
     "                            FILE.bag: a ROS1 bag (builds with ROS): colour, depth and\n"
     "                            camera info paired by stamp, poses from /tf + /tf_static at\n"
     "                            each colour stamp; topics left unset are auto-detected\n"
-    "  --out DIR                 output folder: map.bt, objects.json, objects/*.ply, timings.json\n"
-    "  --model FILE              CenterNet GraphDef (default: models/centernet_coco.pb)\n"
+    "  --out DIR                 output folder: map.bt, objects.json, objects/*.ply, timings.csv\n"
+    "  --config FILE             objmap's configuration file, the same as objmap_server --config\n"
+    "                            and objmap_node's parameters (every key with its default:\n"
+    "                            PREFIX/share/objmap/objmap.example.yaml); the flags below win\n"
+    "  --set SECTION.KEY=V       one configuration key after the file, e.g.\n"
+    "                            --set occupancy.resolution_m=0.02 (repeatable)\n"
+    "  --print-config            print the effective configuration as YAML and exit\n"
+    "  --model FILE              CenterNet GraphDef (default: PREFIX/share/objmap/models/\n"
+    "                            centernet_coco.pb, then $OBJMAP_MODEL, then the source tree's\n"
+    "                            models/ for a build-tree run)\n"
     "  --detections FILE         take detections from a JSON file instead of the network\n"
     "  --save-detections FILE    write the detections used, to replay a run\n"
-    "  --score-threshold S       detector peak threshold (default 0.15)\n"
+    "  --score-threshold S       detector peak threshold (default: detector.score_threshold)\n"
     "  --first-frame N           first frame index (default 0)\n"
     "  --max-frames N            number of frames to read (default: all)\n"
     "  --trajectory FILE         camera / recording: poses, TUM lines `stamp tx ty tz qx qy qz\n"
@@ -46,14 +59,15 @@ constexpr char kMapUsage[] =
     "                            are skipped. Without it the camera is static at the identity\n"
     "                            pose\n"
     "  --trajectory-tolerance S  largest frame/pose stamp difference, seconds (default 0.02)\n"
-    "  --min-translation M       keyframe after this much motion, metres (default 0.10)\n"
-    "  --min-rotation DEG        keyframe after this much rotation, degrees (default 10)\n"
+    "  --min-translation M       keyframe after this much motion, metres (keyframes section)\n"
+    "  --min-rotation DEG        keyframe after this much rotation, degrees (keyframes section)\n"
     "  --every-frame             every frame is a keyframe\n"
     "  --every-nth-frame N       frames 0, N, 2N, ... are the keyframes, whatever the motion\n"
     "  --min-observations N      inventory: keyframes an object needs (default 3)\n"
     "  --min-confidence C        inventory: confidence an object needs (default 0.2)\n"
     "  --min-detection-rate R    inventory: share of the keyframes seeing an object that must\n"
     "                            detect it (default 0.5; 0 = the paper's rule)\n"
+    "                            (the three: inventory section)\n"
     "  --stop-on-error           stop at the first bad frame instead of skipping it\n"
     "  --corrected-poses FILE    after the run, apply these poses as a pose-graph update (lines\n"
     "                            `frame_index tx ty tz qx qy qz qw`, T_W_C) and regenerate the\n"
@@ -108,21 +122,19 @@ class RecordingDetector : public Detector {
   DetectionsByFrame recorded_;
 };
 
-std::unique_ptr<Detector> MakeDetector(Arguments& args, std::string* why) {
+std::unique_ptr<Detector> MakeDetector(Arguments& args, const CenterNetConfig& configured,
+                                       std::string* why) {
   if (args.Has("--detections")) {
     DetectionsFileConfig config;
     config.path = args.Get("--detections", "");
     return MakeDetectionsFileDetector(config, why);
   }
-  CenterNetConfig config;
-  config.model_path = args.Get("--model", OBJMAP_DEFAULT_MODEL_PATH);
-  config.score_threshold = static_cast<float>(args.GetNumber("--score-threshold", 0.15));
-  if (!std::filesystem::exists(config.model_path)) {
-    *why = "detector model " + config.model_path +
-           " not found: run `bash scripts/setup.sh` (fetches and converts it), or pass --model "
-           "FILE or --detections FILE";
+  CenterNetConfig config = configured;
+  if (!FindDetectorModel(configured.model_path, &config.model_path, why)) {
+    *why += " (or --detections FILE)";
     return nullptr;
   }
+  std::cout << "detector model: " << config.model_path << "\n";
   return MakeCenterNetDetector(config, why);
 }
 
@@ -178,27 +190,47 @@ bool WriteTimings(const SequenceRunReport& report, const std::string& path, std:
   return static_cast<bool>(out);
 }
 
-MapperConfig MapperConfigFrom(Arguments& args) {
-  MapperConfig config;
-  config.inventory.min_observations =
-      static_cast<int>(args.GetNumber("--min-observations", config.inventory.min_observations));
-  config.inventory.min_confidence =
-      static_cast<float>(args.GetNumber("--min-confidence", config.inventory.min_confidence));
-  config.inventory.min_detection_rate = static_cast<float>(
-      args.GetNumber("--min-detection-rate", config.inventory.min_detection_rate));
-  return config;
+// The configuration: the defaults, then --config FILE, then --set keys, then the other flags.
+bool ConfigFrom(Arguments& args, const std::vector<std::string>& assignments, ObjmapConfig* config,
+                std::string* why) {
+  if (args.Has("--config") && !LoadObjmapConfig(args.Get("--config", ""), config, why)) {
+    return false;
+  }
+  for (const std::string& assignment : assignments) {
+    if (!SetObjmapConfigKey(assignment, config, why)) {
+      *why = "--set " + *why;
+      return false;
+    }
+  }
+  InventoryConfig& inventory = config->map_server.mapper.inventory;
+  inventory.min_observations =
+      static_cast<int>(args.GetNumber("--min-observations", inventory.min_observations));
+  inventory.min_confidence =
+      static_cast<float>(args.GetNumber("--min-confidence", inventory.min_confidence));
+  inventory.min_detection_rate =
+      static_cast<float>(args.GetNumber("--min-detection-rate", inventory.min_detection_rate));
+  KeyframeSelectorConfig& keyframes = config->keyframes;
+  keyframes.min_translation_m = args.GetNumber("--min-translation", keyframes.min_translation_m);
+  keyframes.min_rotation_deg = args.GetNumber("--min-rotation", keyframes.min_rotation_deg);
+  if (args.Has("--every-frame")) {
+    keyframes.every_nth_frame = 1;
+  } else if (args.Has("--every-nth-frame")) {
+    keyframes.every_nth_frame =
+        static_cast<int>(args.GetNumber("--every-nth-frame", keyframes.every_nth_frame));
+  }
+  CenterNetConfig& detector = config->detector;
+  detector.model_path = args.Get("--model", detector.model_path);
+  detector.score_threshold =
+      static_cast<float>(args.GetNumber("--score-threshold", detector.score_threshold));
+  if (!args.error().empty()) return true;  // reported with the usage by the caller
+  return config->IsValid(why);
 }
 
-SequenceRunConfig RunConfigFrom(Arguments& args) {
+SequenceRunConfig RunConfigFrom(Arguments& args, const ObjmapConfig& objmap_config) {
   SequenceRunConfig config;
   config.first_frame = static_cast<std::size_t>(args.GetNumber("--first-frame", 0));
   config.max_frames = static_cast<std::size_t>(args.GetNumber("--max-frames", 0));
-  config.keyframes.min_translation_m =
-      args.GetNumber("--min-translation", config.keyframes.min_translation_m);
-  config.keyframes.min_rotation_deg =
-      args.GetNumber("--min-rotation", config.keyframes.min_rotation_deg);
-  config.keyframes.every_nth_frame =
-      args.Has("--every-frame") ? 1 : static_cast<int>(args.GetNumber("--every-nth-frame", 0));
+  config.keyframes = objmap_config.keyframes;
   config.stop_on_bad_frame = args.Has("--stop-on-error");
   return config;
 }
@@ -254,26 +286,52 @@ bool ApplyCorrectedPoses(const std::string& path, const SequenceRunReport& repor
 
 }  // namespace
 
+// The values of every "--set" in argv, in order (Arguments keeps one value per flag), and argv
+// without them.
+std::vector<std::string> TakeSetFlags(int argc, char** argv, std::vector<char*>* rest) {
+  std::vector<std::string> assignments;
+  for (int i = 0; i < argc; ++i) {
+    const std::string word = argv[i];
+    if (word == "--set" && i + 1 < argc) {
+      assignments.push_back(argv[++i]);
+    } else if (word.rfind("--set=", 0) == 0) {
+      assignments.push_back(word.substr(6));
+    } else {
+      rest->push_back(argv[i]);
+    }
+  }
+  return assignments;
+}
+
 int RunMapCommand(int argc, char** argv) {
+  std::vector<char*> words;
+  const std::vector<std::string> assignments = TakeSetFlags(argc, argv, &words);
   std::set<std::string> flags_with_value(
-      {"--out", "--model", "--detections", "--save-detections", "--score-threshold",
-       "--first-frame", "--max-frames", "--min-translation", "--min-rotation", "--every-nth-frame",
-       "--min-observations", "--min-confidence", "--min-detection-rate", "--corrected-poses",
-       "--trajectory", "--trajectory-tolerance"});
+      {"--out", "--config", "--set", "--model", "--detections", "--save-detections",
+       "--score-threshold", "--first-frame", "--max-frames", "--min-translation", "--min-rotation",
+       "--every-nth-frame", "--min-observations", "--min-confidence", "--min-detection-rate",
+       "--corrected-poses", "--trajectory", "--trajectory-tolerance"});
   flags_with_value.merge(MapBagFlags());
-  Arguments args(argc, argv, flags_with_value, {"--every-frame", "--stop-on-error", "--help"});
+  Arguments args(static_cast<int>(words.size()), words.data(), flags_with_value,
+                 {"--every-frame", "--stop-on-error", "--print-config", "--help"});
   if (args.Has("--help")) {
     std::cout << kMapUsage << kMapBagUsage;
     return 0;
   }
-  const MapperConfig mapper_config = MapperConfigFrom(args);
-  SequenceRunConfig run_config = RunConfigFrom(args);
+  std::string why;
+  ObjmapConfig objmap_config;
+  if (!ConfigFrom(args, assignments, &objmap_config, &why)) return Fail(why);
+  if (args.error().empty() && args.Has("--print-config")) {
+    std::cout << ObjmapConfigToYaml(objmap_config);
+    return 0;
+  }
+  const MapperConfig& mapper_config = objmap_config.map_server.mapper;
+  SequenceRunConfig run_config = RunConfigFrom(args, objmap_config);
   const MapInputOptions input_options = InputOptionsFrom(args, run_config);
   if (!args.error().empty() || args.positional().size() != 1 || !args.Has("--out")) {
     std::cerr << (args.error().empty() ? "" : args.error() + "\n") << kMapUsage << kMapBagUsage;
     return 2;
   }
-  std::string why;
   if (!mapper_config.IsValid(&why) || !run_config.IsValid(&why)) return Fail(why);
   MapInput input;
   if (!OpenMapInput(args.positional()[0], input_options, &input, &why)) return Fail(why);
@@ -281,7 +339,7 @@ int RunMapCommand(int argc, char** argv) {
     run_config.first_frame = 0;
     run_config.max_frames = 0;
   }
-  auto detector = MakeDetector(args, &why);
+  auto detector = MakeDetector(args, objmap_config.detector, &why);
   if (!detector) return Fail(why);
   auto recorder = std::make_unique<RecordingDetector>(std::move(detector));
   std::cout << "mapping " << input.stream->Describe() << " with the " << recorder->Name()

@@ -11,6 +11,7 @@ namespace objmap::cli {
 namespace {
 
 constexpr char kObjectsUsage[] =
+    "objmap objects: lists a running server's objects by class, region or distance.\n"
     "usage: objmap objects [options]\n"
     "  --class NAME              only this COCO class (\"cup\", \"dining table\")\n"
     "  --region X0 Y0 Z0 X1 Y1 Z1  only objects whose centroid lies in this box, metres\n"
@@ -30,7 +31,8 @@ v1::QueryObjectsRequest RequestFrom(Arguments& args) {
         BoxToProto({region[0], region[1], region[2]}, {region[3], region[4], region[5]});
   }
   const std::vector<double> near = args.GetNumbers("--near");
-  if (near.size() == 3) *request.mutable_nearest_to() = Vec3ToProto(Eigen::Vector3d(near[0], near[1], near[2]));
+  if (near.size() == 3)
+    *request.mutable_nearest_to() = Vec3ToProto(Eigen::Vector3d(near[0], near[1], near[2]));
   request.set_min_confidence(static_cast<float>(args.GetNumber("--min-confidence", 0.0)));
   request.set_max_results(static_cast<std::int32_t>(args.GetInteger("--limit", 0, 0)));
   request.set_include_unconfirmed(args.Has("--all"));

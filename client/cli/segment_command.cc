@@ -12,6 +12,7 @@ namespace objmap::cli {
 int RunSegmentCommand(int argc, char** argv) {
   Arguments args(argc, argv, {"--out"}, {"--help"});
   constexpr char kUsage[] =
+      "objmap segment: segments one organized point cloud without supervision (labels per point).\n"
       "usage: objmap segment <organized.pcd> --out <labelled.pcd>\n"
       "  reads an organized cloud (fields x y z rgb/rgba) and writes it with a `label` field:\n"
       "  0 for invalid points, segment s as s + 1\n";

@@ -9,7 +9,9 @@
 namespace objmap::cli {
 namespace {
 
-constexpr char kStatusUsage[] = "usage: objmap status [options]\n";
+constexpr char kStatusUsage[] =
+    "objmap status: prints a running server's map version, counts, queue and database.\n"
+    "usage: objmap status [options]\n";
 
 std::string Regeneration(const v1::StatusResponse& status) {
   char text[128];

@@ -10,6 +10,8 @@ namespace objmap::cli {
 namespace {
 
 constexpr char kUpdatePosesUsage[] =
+    "objmap update-poses: sends corrected keyframe poses (a loop closure) to a running server,\n"
+    "which regenerates its map.\n"
     "usage: objmap update-poses <poses.txt> [options]\n"
     "  <poses.txt>               lines \"keyframe_id tx ty tz qx qy qz qw\" (T_W_C, TUM order);\n"
     "                            '#' starts a comment\n"

@@ -2,14 +2,15 @@
 // stdout once it serves (scripts and tests wait for it), everything else to stderr.
 #include <csignal>
 #include <cstdio>
-#include <filesystem>
 #include <iostream>
 
+#include "config/build_info.h"
+#include "config/objmap_config.h"
 #include "detection/centernet_detector.h"
+#include "detection/model_location.h"
 #include "grpc_service/grpc_server.h"
 #include "grpc_service/map_service.h"
 #include "map_server/map_server.h"
-#include "server_config.h"
 #include "server_options.h"
 
 namespace objmap {
@@ -18,11 +19,16 @@ namespace {
 // Connections get this long to finish their calls after SIGINT/SIGTERM; then they are cancelled.
 constexpr std::chrono::seconds kShutdownGrace{5};
 
-// The configuration: the build's defaults, then the file, then the command line.
-bool LoadConfig(const ServerOptions& options, ServerConfig* config, std::string* why) {
-  config->detector.model_path = OBJMAP_DEFAULT_MODEL_PATH;
-  if (!options.config_path.empty() && !LoadServerConfig(options.config_path, config, why)) {
+// The configuration: the defaults, then the file, then --set keys, then the other flags.
+bool LoadConfig(const ServerOptions& options, ObjmapConfig* config, std::string* why) {
+  if (!options.config_path.empty() && !LoadObjmapConfig(options.config_path, config, why)) {
     return false;
+  }
+  for (const std::string& assignment : options.config_keys) {
+    if (!SetObjmapConfigKey(assignment, config, why)) {
+      *why = "--set " + *why;
+      return false;
+    }
   }
   if (!options.model_path.empty()) config->detector.model_path = options.model_path;
   return config->IsValid(why);
@@ -33,16 +39,16 @@ bool LoadConfig(const ServerOptions& options, ServerConfig* config, std::string*
 bool MakeDetector(const ServerOptions& options, const CenterNetConfig& config,
                   std::unique_ptr<Detector>* detector, std::string* why) {
   if (options.no_detector) return true;
-  std::error_code error;
-  if (!std::filesystem::is_regular_file(config.model_path, error)) {
-    std::cerr << "objmap_server: warning: detector model " << config.model_path
-              << " not found; running without a detector, so keyframes sent without "
-                 "detections add no objects (run `bash scripts/setup.sh`, pass --model FILE, "
-                 "or --no-detector to silence this)\n";
+  CenterNetConfig found = config;
+  std::string missing;
+  if (!FindDetectorModel(config.model_path, &found.model_path, &missing)) {
+    std::cerr << "objmap_server: warning: " << missing
+              << "\nrunning without a detector, so keyframes sent without detections add no "
+                 "objects (--no-detector silences this)\n";
     return true;
   }
-  *detector = MakeCenterNetDetector(config, why);
-  if (*detector) std::cerr << "objmap_server: detector " << config.model_path << "\n";
+  *detector = MakeCenterNetDetector(found, why);
+  if (*detector) std::cerr << "objmap_server: detector " << found.model_path << "\n";
   return *detector != nullptr;
 }
 
@@ -64,7 +70,7 @@ int WaitForStopSignal(const sigset_t& signals) {
 }
 
 // The detector and the map server, or nullptr after printing why not.
-std::unique_ptr<MapServer> OpenMapServer(const ServerOptions& options, const ServerConfig& config) {
+std::unique_ptr<MapServer> OpenMapServer(const ServerOptions& options, const ObjmapConfig& config) {
   std::string why;
   std::unique_ptr<Detector> detector;
   if (!MakeDetector(options, config.detector, &detector, &why)) {
@@ -90,7 +96,7 @@ void PrintListening(const ServerOptions& options, int port, const MapServer& map
   std::fflush(stdout);
 }
 
-int Serve(const ServerOptions& options, const ServerConfig& config) {
+int Serve(const ServerOptions& options, const ObjmapConfig& config) {
   const sigset_t signals = StopSignals();
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
   std::unique_ptr<MapServer> map_server = OpenMapServer(options, config);
@@ -133,13 +139,17 @@ int main(int argc, char** argv) {
     std::cout << objmap::ServerUsage();
     return 0;
   }
-  objmap::ServerConfig config;
+  if (options.version) {
+    std::cout << objmap::BuildDescription();
+    return 0;
+  }
+  objmap::ObjmapConfig config;
   if (!objmap::LoadConfig(options, &config, &why)) {
     std::cerr << "objmap_server: " << why << "\n";
     return 1;
   }
   if (options.print_config) {
-    std::cout << objmap::ServerConfigToYaml(config);
+    std::cout << objmap::ObjmapConfigToYaml(config);
     return 0;
   }
   return objmap::Serve(options, config);

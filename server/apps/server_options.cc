@@ -28,6 +28,8 @@ bool SetValue(const std::string& flag, const std::string& value, ServerOptions* 
     options->db_path = value;
   } else if (flag == "--config") {
     options->config_path = value;
+  } else if (flag == "--set") {
+    options->config_keys.push_back(value);
   } else if (flag == "--model") {
     options->model_path = value;
   } else if (flag == "--listen") {
@@ -54,6 +56,8 @@ bool ParseServerOptions(int argc, const char* const* argv, ServerOptions* option
     const std::string& arg = args[i];
     if (arg == "--help" || arg == "-h") {
       options->help = true;
+    } else if (arg == "--version") {
+      options->version = true;
     } else if (arg == "--no-detector") {
       options->no_detector = true;
     } else if (arg == "--print-config") {
@@ -70,30 +74,40 @@ bool ParseServerOptions(int argc, const char* const* argv, ServerOptions* option
       ++i;
     }
   }
-  if (options->db_path.empty() && !options->help && !options->print_config) {
+  if (options->db_path.empty() && !options->help && !options->version && !options->print_config) {
     *why = "--db PATH is required";
     return false;
   }
   // Checked here, before the database is opened and the detector loaded.
   std::string invalid;
   if (!options->grpc.IsValid(&invalid)) {
-    *why = (invalid.rfind("listen address", 0) == 0 ? "--listen: " : "--max-message-mb: ") +
-           invalid;
+    *why =
+        (invalid.rfind("listen address", 0) == 0 ? "--listen: " : "--max-message-mb: ") + invalid;
     return false;
   }
   return true;
 }
 
 const char* ServerUsage() {
-  return "usage: objmap_server --db map.db [options]\n"
+  return "objmap_server: serves an object map over gRPC (MapService, proto_srv/objmap.proto)\n"
+         "while keyframes arrive, keeping it in a SQLite file.\n"
+         "usage: objmap_server --db map.db [options]\n"
          "  --db PATH             SQLite map database (created when missing)\n"
          "  --listen HOST:PORT    address to serve on (default 127.0.0.1:50051; port 0 picks a\n"
          "                        free port, printed on the 'listening' line)\n"
-         "  --config FILE         YAML configuration (see server/apps/objmap.example.yaml)\n"
+         "  --config FILE         YAML configuration, the same file as `objmap map --config` and\n"
+         "                        objmap_node's parameters "
+         "(PREFIX/share/objmap/objmap.example.yaml\n"
+         "                        lists every key with its default)\n"
+         "  --set SECTION.KEY=V   one configuration key, after the file (repeatable)\n"
          "  --model FILE          CenterNet GraphDef for keyframes sent without detections\n"
+         "                        (default: PREFIX/share/objmap/models/centernet_coco.pb, then\n"
+         "                        $OBJMAP_MODEL, then the source tree's models/ for a build-tree "
+         "run)\n"
          "  --no-detector         run no detector: keyframes without detections add no objects\n"
          "  --max-message-mb N    largest request accepted, MiB (default 64)\n"
          "  --print-config        print the effective configuration as YAML and exit\n"
+         "  --version             print the version and the build's options and exit\n"
          "Stops cleanly on SIGINT or SIGTERM: acknowledged keyframes are always durable.\n";
 }
 

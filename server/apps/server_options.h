@@ -2,18 +2,21 @@
 // objmap_server's command line.
 
 #include <string>
+#include <vector>
 
 #include "grpc_service/grpc_server.h"
 
 namespace objmap {
 
 struct ServerOptions {
-  std::string db_path;        ///< --db, required
-  std::string config_path;    ///< --config, empty: defaults
+  std::string db_path;                   ///< --db, required
+  std::string config_path;               ///< --config, empty: defaults
+  std::vector<std::string> config_keys;  ///< --set section.key=value, applied after the file
   std::string model_path;     ///< --model, empty: the config's (or the build's default) model
   bool no_detector = false;   ///< --no-detector
   bool print_config = false;  ///< --print-config: print the effective YAML and exit
   bool help = false;          ///< --help
+  bool version = false;       ///< --version
   grpc_service::GrpcServerOptions grpc;  ///< --listen, --max-message-mb
 };
 

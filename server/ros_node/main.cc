@@ -1,11 +1,10 @@
 // objmap_node: the object map as a ROS1 node. Parameters: launch/objmap.launch and
-// server/apps/objmap.example.yaml; topics and services: docs/ros.md.
+// server/core/config/objmap.example.yaml; topics and services: docs/ros.md.
 #include <ros/ros.h>
-
-#include <filesystem>
 
 #include "dataset/frame_stream.h"
 #include "detection/centernet_detector.h"
+#include "detection/model_location.h"
 #include "map_node.h"
 #include "map_server/map_server.h"
 #include "node_config.h"
@@ -37,7 +36,6 @@ int main(int argc, char** argv) {
   ros::NodeHandle private_node("~");
 
   objmap::ros_node::NodeConfig config;
-  config.server.detector.model_path = OBJMAP_DEFAULT_MODEL_PATH;
   std::string why;
   if (!objmap::ros_node::LoadNodeConfig(private_node, &config, &why)) {
     ROS_FATAL_STREAM("objmap_node: bad parameters: " << why);
@@ -45,14 +43,14 @@ int main(int argc, char** argv) {
   }
   std::unique_ptr<objmap::Detector> detector;
   if (config.detections_topic.empty() && config.run_detector) {
-    if (!std::filesystem::exists(config.server.detector.model_path)) {
-      ROS_FATAL_STREAM("objmap_node: detector model " << config.server.detector.model_path
-                                                      << " not found: run `bash scripts/setup.sh`, "
-                                                         "set ~detector/model_path, or set "
-                                                         "~run_detector false");
+    objmap::CenterNetConfig detector_config = config.objmap.detector;
+    if (!objmap::FindDetectorModel(detector_config.model_path, &detector_config.model_path, &why)) {
+      ROS_FATAL_STREAM("objmap_node: " << why
+                                       << " (or set ~detector/model_path, or ~run_detector false)");
       return 2;
     }
-    detector = objmap::MakeCenterNetDetector(config.server.detector, &why);
+    ROS_INFO_STREAM("objmap_node: detector " << detector_config.model_path);
+    detector = objmap::MakeCenterNetDetector(detector_config, &why);
     if (!detector) {
       ROS_FATAL_STREAM("objmap_node: detector: " << why);
       return 2;
@@ -67,7 +65,7 @@ int main(int argc, char** argv) {
     }
   }
   std::shared_ptr<objmap::MapServer> server =
-      objmap::MapServer::Open(config.server.map_server, config.database, std::move(detector), &why);
+      objmap::MapServer::Open(config.objmap.map_server, config.database, std::move(detector), &why);
   if (!server) {
     ROS_FATAL_STREAM("objmap_node: map database " << config.database << ": " << why);
     return 2;

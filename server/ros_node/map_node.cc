@@ -34,7 +34,7 @@ MapNode::Impl::Impl(const ros::NodeHandle& node_in, const ros::NodeHandle& priva
       private_node(private_node_in),
       config(config_in),
       server(std::move(server_in)),
-      keyframe_selector(config_in.keyframes) {}
+      keyframe_selector(config_in.objmap.keyframes) {}
 
 MapNode::MapNode(const ros::NodeHandle& node, const ros::NodeHandle& private_node,
                  const NodeConfig& config, std::shared_ptr<MapServer> server,

@@ -15,7 +15,7 @@ class NodeHandle;
 namespace objmap {
 class FrameStream;
 class MapServer;
-}
+}  // namespace objmap
 
 namespace objmap::ros_node {
 

@@ -4,8 +4,8 @@
 
 #include <vector>
 
+#include "config/config_fields.h"
 #include "ros_params.h"
-#include "server_config_fields.h"
 #include "types/coco_classes.h"
 
 namespace objmap::ros_node {
@@ -17,7 +17,7 @@ class ParamReader : public ros_bridge::RosParamReader {
   explicit ParamReader(const ros::NodeHandle& node)
       : RosParamReader(node,
                        "objmap_node's parameters are listed in launch/objmap.launch and "
-                       "server/apps/objmap.example.yaml") {}
+                       "server/core/config/objmap.example.yaml") {}
 
   using RosParamReader::operator();
 
@@ -62,10 +62,6 @@ void VisitNodeKeys(NodeConfig* c, ParamReader& v) {
   v("sync_queue_size", &c->sync_queue_size);
   v("pose_timeout_s", &c->pose_timeout_s);
   v("input", &c->input);
-  v.Section("keyframes");
-  v("min_translation_m", &c->keyframes.min_translation_m);
-  v("min_rotation_deg", &c->keyframes.min_rotation_deg);
-  v("every_nth_frame", &c->keyframes.every_nth_frame);
   v.Section("publish");
   v("markers", &c->publish.markers);
   v("occupied_every_keyframes", &c->publish.occupied_every_keyframes);
@@ -126,20 +122,15 @@ bool NodeConfig::IsValid(std::string* why) const {
         "~openni2/static_camera true";
     return false;
   }
-  std::string reason;
-  if (!keyframes.IsValid(&reason)) {
-    *why = "~keyframes: " + reason;
-    return false;
-  }
-  return publish.IsValid(why) && server.IsValid(why);
+  return publish.IsValid(why) && objmap.IsValid(why);
 }
 
 bool LoadNodeConfig(const ros::NodeHandle& private_node, NodeConfig* config, std::string* why) {
   ParamReader reader(private_node);
   VisitNodeKeys(config, reader);
-  // The map server's sections, walked by the same list as objmap_server's YAML reader; it ends
-  // with Finish(), which reports parameters that neither list has.
-  internal::VisitServerConfig(&config->server, reader);
+  // objmap's sections, walked by the same list as the YAML file's reader; it ends with
+  // Finish(), which reports parameters that neither list has.
+  internal::VisitObjmapConfig(&config->objmap, reader);
   if (!reader.ok()) {
     *why = reader.error();
     return false;

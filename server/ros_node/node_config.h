@@ -4,10 +4,9 @@
 
 #include <string>
 
-#include "dataset/keyframe_selector.h"
+#include "config/objmap_config.h"
 // The config struct only: the OpenNI2 library is linked where it was found (main.cc).
 #include "openni2/openni2_source.h"
-#include "server_config.h"
 
 namespace ros {
 class NodeHandle;
@@ -40,12 +39,13 @@ struct CameraInputConfig {
 };
 
 /// Everything objmap_node reads at start. Parameters live in the node's private namespace:
-/// the keys below at the top level, and the map server's sections (server, store, mapper,
-/// segmenter, ..., detector: the objmap_server YAML layout, server/apps/objmap.example.yaml) as
-/// `~section/key`, so that `rosparam load objmap.example.yaml ~` configures both alike.
+/// the keys below at the top level, and the sections of objmap's configuration file (server,
+/// store, mapper, segmenter, ..., keyframes, detector: server/core/config/objmap.example.yaml,
+/// the file objmap map and objmap_server read) as `~section/key`, so that
+/// `rosparam load objmap.example.yaml ~` configures all three alike.
 struct NodeConfig {
-  /// The map server's configuration (sections of objmap_server's YAML file).
-  ServerConfig server;
+  /// objmap's configuration: the map server's sections, keyframe selection, the detector.
+  ObjmapConfig objmap;
   /// SQLite file of the map; opened (and the map restored) at start, created when absent.
   std::string database = "objmap.db";
   /// Frame of the map: poses T_W_C are the transform from the camera's frame into this one.
@@ -71,8 +71,6 @@ struct NodeConfig {
   int sync_queue_size = 10;
   /// How long a frame waits for its camera pose (TF or pose topic) before it is rejected.
   double pose_timeout_s = 0.5;
-  /// Keyframes among the frames received (section `keyframes`).
-  KeyframeSelectorConfig keyframes;
   /// Section `publish`.
   PublishConfig publish;
   /// Where frames come from: "topics" (a camera driver's topics, the default) or "openni2" (the

@@ -1,8 +1,9 @@
 #pragma once
-// The list of sections and keys of objmap_server's YAML file, walked by its reader and writer
-// (server_config.cc) and by objmap_node's ROS-parameter reader (server/ros_node/node_config.cc).
+// The list of sections and keys of objmap's configuration file, walked by its YAML reader and
+// writer (objmap_config.cc) and by objmap_node's ROS-parameter reader
+// (server/ros_node/node_config.cc).
 
-#include "server_config.h"
+#include "config/objmap_config.h"
 
 namespace objmap::internal {
 
@@ -86,7 +87,7 @@ void VisitMapModel(MapperConfig* m, Visitor& v) {
 }
 
 template <typename Visitor>
-void VisitServerConfig(ServerConfig* c, Visitor& v) {
+void VisitObjmapConfig(ObjmapConfig* c, Visitor& v) {
   MapServerConfig& s = c->map_server;
   v.Section("server");
   v("max_queue", &s.max_queue);
@@ -101,6 +102,11 @@ void VisitServerConfig(ServerConfig* c, Visitor& v) {
   v("synchronous", &s.store.synchronous);
   VisitMapper(&s.mapper, v);
   VisitMapModel(&s.mapper, v);
+  KeyframeSelectorConfig& k = c->keyframes;
+  v.Section("keyframes");
+  v("min_translation_m", &k.min_translation_m);
+  v("min_rotation_deg", &k.min_rotation_deg);
+  v("every_nth_frame", &k.every_nth_frame);
   CenterNetConfig& d = c->detector;
   v.Section("detector");
   v("model_path", &d.model_path);

@@ -1,4 +1,4 @@
-#include "server_config.h"
+#include "config/objmap_config.h"
 
 #include <yaml-cpp/yaml.h>
 
@@ -9,7 +9,7 @@
 #include <sstream>
 #include <type_traits>
 
-#include "server_config_fields.h"
+#include "config/config_fields.h"
 #include "types/coco_classes.h"
 
 namespace objmap {
@@ -191,11 +191,20 @@ class Writer {
 
 }  // namespace
 
-bool ServerConfig::IsValid(std::string* why) const {
-  return map_server.IsValid(why) && detector.IsValid(why);
+bool ObjmapConfig::IsValid(std::string* why) const {
+  if (!map_server.IsValid(why)) return false;
+  std::string reason;
+  if (!keyframes.IsValid(&reason)) {
+    *why = "keyframes: " + reason;
+    return false;
+  }
+  // An empty model path is a request for the installed model, found when the detector is made.
+  CenterNetConfig detector_checked = detector;
+  if (detector_checked.model_path.empty()) detector_checked.model_path = "(installed model)";
+  return detector_checked.IsValid(why);
 }
 
-bool ParseServerConfig(const std::string& yaml_text, ServerConfig* config, std::string* why) {
+bool ParseObjmapConfig(const std::string& yaml_text, ObjmapConfig* config, std::string* why) {
   YAML::Node root;
   try {
     root = YAML::Load(yaml_text);
@@ -209,7 +218,7 @@ bool ParseServerConfig(const std::string& yaml_text, ServerConfig* config, std::
   }
   Reader reader(root);
   try {
-    internal::VisitServerConfig(config, reader);
+    internal::VisitObjmapConfig(config, reader);
   } catch (const YAML::Exception& e) {  // e.g. a key that is itself a list
     *why = e.what();
     return false;
@@ -218,7 +227,7 @@ bool ParseServerConfig(const std::string& yaml_text, ServerConfig* config, std::
   return reader.ok();
 }
 
-bool LoadServerConfig(const std::string& path, ServerConfig* config, std::string* why) {
+bool LoadObjmapConfig(const std::string& path, ObjmapConfig* config, std::string* why) {
   std::ifstream file(path);
   if (!file) {
     *why = path + ": cannot open the configuration file";
@@ -227,17 +236,47 @@ bool LoadServerConfig(const std::string& path, ServerConfig* config, std::string
   std::ostringstream text;
   text << file.rdbuf();
   std::string reason;
-  if (!ParseServerConfig(text.str(), config, &reason) || !config->IsValid(&reason)) {
+  if (!ParseObjmapConfig(text.str(), config, &reason) || !config->IsValid(&reason)) {
     *why = path + ": " + reason;
     return false;
   }
   return true;
 }
 
-std::string ServerConfigToYaml(const ServerConfig& config) {
-  ServerConfig copy = config;
+bool SetObjmapConfigKey(const std::string& assignment, ObjmapConfig* config, std::string* why) {
+  const std::size_t equals = assignment.find('=');
+  const std::size_t dot = assignment.find('.');
+  if (equals == std::string::npos || dot == std::string::npos || dot == 0 || dot + 1 >= equals) {
+    *why = "'" + assignment + "': expected section.key=value (occupancy.resolution_m=0.02)";
+    return false;
+  }
+  const std::string section = assignment.substr(0, dot);
+  const std::string key = assignment.substr(dot + 1, equals - dot - 1);
+  const std::string value = assignment.substr(equals + 1);
+  if (key.find_first_of(".:#{}[], ") != std::string::npos ||
+      section.find_first_of(":#{}[], ") != std::string::npos) {
+    *why = "'" + assignment + "': expected section.key=value (occupancy.resolution_m=0.02)";
+    return false;
+  }
+  // The same reader as a file's, so the same keys, types and messages: a one-key document.
+  YAML::Node value_node;
+  try {
+    value_node = value.empty() ? YAML::Node(std::string()) : YAML::Load(value);
+  } catch (const YAML::Exception& e) {
+    *why = section + "." + key + ": cannot read the value '" + value + "': " + e.what();
+    return false;
+  }
+  YAML::Node document;
+  document[section][key] = value_node;
+  YAML::Emitter text;
+  text << document;
+  return ParseObjmapConfig(text.c_str(), config, why);
+}
+
+std::string ObjmapConfigToYaml(const ObjmapConfig& config) {
+  ObjmapConfig copy = config;
   Writer writer;
-  internal::VisitServerConfig(&copy, writer);
+  internal::VisitObjmapConfig(&copy, writer);
   return writer.Text();
 }
 

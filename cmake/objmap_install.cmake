@@ -1,0 +1,59 @@
+# `cmake --install build --prefix P`: a working objmap under any prefix.
+#   P/bin/                 objmap, objmap_server, objmap_node and objmap_dataset_player (those built)
+#   P/share/objmap/        models/centernet_coco.pb, objmap.example.yaml, launch/*.launch
+#   P/lib/objmap/          links to the ROS executables, where rosrun and roslaunch look
+# The executables find the model relative to their own location (detection/model_location.h),
+# so nothing here is configured with P. Included by the top-level CMakeLists.txt after every
+# target exists.
+include(GNUInstallDirs)
+set(OBJMAP_INSTALL_SHARE_DIR ${CMAKE_INSTALL_DATADIR}/objmap)
+
+foreach(program objmap objmap_server objmap_node objmap_dataset_player)
+  if(TARGET ${program})
+    install(TARGETS ${program} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+  endif()
+endforeach()
+
+# roslaunch's pkg="objmap" looks in lib/objmap (catkin's package executable folder).
+foreach(program objmap_node objmap_dataset_player)
+  if(TARGET ${program})
+    install(CODE "
+      set(_link \"\$ENV{DESTDIR}\${CMAKE_INSTALL_PREFIX}/lib/objmap/${program}\")
+      file(MAKE_DIRECTORY \"\$ENV{DESTDIR}\${CMAKE_INSTALL_PREFIX}/lib/objmap\")
+      file(REMOVE \"\${_link}\")
+      file(CREATE_LINK ../../${CMAKE_INSTALL_BINDIR}/${program} \"\${_link}\" SYMBOLIC)
+      message(STATUS \"Installing: \${_link} -> ../../${CMAKE_INSTALL_BINDIR}/${program}\")")
+  endif()
+endforeach()
+
+# The detector model, when scripts/fetch_model.sh has made it; without it the executables say
+# where they looked.
+set(OBJMAP_MODEL_FILE ${PROJECT_SOURCE_DIR}/models/centernet_coco.pb)
+if(NOT EXISTS ${OBJMAP_MODEL_FILE})
+  message(STATUS "objmap: ${OBJMAP_MODEL_FILE} is absent (scripts/fetch_model.sh makes it); "
+    "the install will not have the detector model")
+endif()
+install(FILES ${OBJMAP_MODEL_FILE} DESTINATION ${OBJMAP_INSTALL_SHARE_DIR}/models OPTIONAL)
+
+set(OBJMAP_EXAMPLE_CONFIG ${PROJECT_SOURCE_DIR}/server/core/config/objmap.example.yaml)
+install(FILES ${OBJMAP_EXAMPLE_CONFIG} DESTINATION ${OBJMAP_INSTALL_SHARE_DIR})
+
+# The launch files load the example configuration from the source tree's layout
+# ($(find objmap) is the source folder in a catkin devel space); the installed copies point to
+# the installed one instead.
+set(_objmap_source_config "$(find objmap)/server/core/config/objmap.example.yaml")
+set(_objmap_installed_config "$(find objmap)/objmap.example.yaml")
+file(GLOB _objmap_launch_files ${PROJECT_SOURCE_DIR}/launch/*.launch)
+foreach(launch_file ${_objmap_launch_files})
+  get_filename_component(name ${launch_file} NAME)
+  file(READ ${launch_file} text)
+  string(REPLACE "${_objmap_source_config}" "${_objmap_installed_config}" text "${text}")
+  file(WRITE ${PROJECT_BINARY_DIR}/installed_launch/${name} "${text}")
+  set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS ${launch_file})
+  install(FILES ${PROJECT_BINARY_DIR}/installed_launch/${name}
+    DESTINATION ${OBJMAP_INSTALL_SHARE_DIR}/launch)
+endforeach()
+# roslaunch finds the package by its manifest (catkin_package installs it too in workspaces).
+if(NOT OBJMAP_ROS_ENABLED)
+  install(FILES ${PROJECT_SOURCE_DIR}/package.xml DESTINATION ${OBJMAP_INSTALL_SHARE_DIR})
+endif()
