@@ -122,6 +122,12 @@ bool NodeConfig::IsValid(std::string* why) const {
         "~openni2/static_camera true";
     return false;
   }
+  // Named as the node's parameters; the other sections' reasons name their config struct.
+  std::string reason;
+  if (!objmap.keyframes.IsValid(&reason)) {
+    *why = "~keyframes: " + reason;
+    return false;
+  }
   return publish.IsValid(why) && objmap.IsValid(why);
 }
 
