@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # scripts/fetch_model.sh against a registry that refuses connections: it must fail, show npm's
-# own error and say what to do, and leave no model behind.
+# own error (npm 9 writes "npm ERR!", later ones "npm error") and say what to do, and leave no
+# model behind.
 #   fetch_model_failure_test.sh SOURCE_DIR
 set -uo pipefail
 command -v npm >/dev/null || { echo "SKIPPED: needs npm"; exit 77; }
@@ -13,7 +14,7 @@ echo "${output}"
 fail() { echo "FAILED: $*"; exit 1; }
 [[ ${status} -eq 1 ]] || fail "exit status ${status}, expected 1"
 grep -q "npm could not download" <<<"${output}" || fail "no statement that the download failed"
-grep -q "| npm error code ECONNREFUSED" <<<"${output}" || fail "npm's own error is not shown"
+grep -qE "\| npm (ERR!|error) code ECONNREFUSED" <<<"${output}" || fail "npm's own error is not shown"
 grep -q "what to do" <<<"${output}" || fail "no advice"
 grep -q "proxy" <<<"${output}" || fail "no network advice for a refused connection"
 [[ ! -e "${out_dir}/model.pb" ]] || fail "a model file was left behind"
