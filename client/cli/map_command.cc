@@ -193,15 +193,7 @@ bool WriteTimings(const SequenceRunReport& report, const std::string& path, std:
 // The configuration: the defaults, then --config FILE, then --set keys, then the other flags.
 bool ConfigFrom(Arguments& args, const std::vector<std::string>& assignments, ObjmapConfig* config,
                 std::string* why) {
-  if (args.Has("--config") && !LoadObjmapConfig(args.Get("--config", ""), config, why)) {
-    return false;
-  }
-  for (const std::string& assignment : assignments) {
-    if (!SetObjmapConfigKey(assignment, config, why)) {
-      *why = "--set " + *why;
-      return false;
-    }
-  }
+  if (!ReadObjmapConfig(args.Get("--config", ""), assignments, config, why)) return false;
   InventoryConfig& inventory = config->map_server.mapper.inventory;
   inventory.min_observations =
       static_cast<int>(args.GetNumber("--min-observations", inventory.min_observations));

@@ -21,15 +21,7 @@ constexpr std::chrono::seconds kShutdownGrace{5};
 
 // The configuration: the defaults, then the file, then --set keys, then the other flags.
 bool LoadConfig(const ServerOptions& options, ObjmapConfig* config, std::string* why) {
-  if (!options.config_path.empty() && !LoadObjmapConfig(options.config_path, config, why)) {
-    return false;
-  }
-  for (const std::string& assignment : options.config_keys) {
-    if (!SetObjmapConfigKey(assignment, config, why)) {
-      *why = "--set " + *why;
-      return false;
-    }
-  }
+  if (!ReadObjmapConfig(options.config_path, options.config_keys, config, why)) return false;
   if (!options.model_path.empty()) config->detector.model_path = options.model_path;
   return config->IsValid(why);
 }

@@ -7,8 +7,6 @@
 
 namespace objmap {
 
-const char* ObjmapVersion() { return OBJMAP_VERSION_STRING; }
-
 std::string BuildDescription() {
   return std::string("objmap ") + OBJMAP_VERSION_STRING + "\n" +
          "  gRPC server and client:  " + OBJMAP_BUILT_WITH_GRPC + "\n" +

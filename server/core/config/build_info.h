@@ -6,9 +6,6 @@
 
 namespace objmap {
 
-/// The project version (CMakeLists.txt, package.xml): "0.1.0".
-[[nodiscard]] const char* ObjmapVersion();
-
 /// "objmap 0.1.0" and one line per optional part: "gRPC: yes", "ROS1: no (...)",
 /// "OpenNI2: yes", then the build type.
 [[nodiscard]] std::string BuildDescription();

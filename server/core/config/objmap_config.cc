@@ -246,18 +246,16 @@ bool LoadObjmapConfig(const std::string& path, ObjmapConfig* config, std::string
 bool SetObjmapConfigKey(const std::string& assignment, ObjmapConfig* config, std::string* why) {
   const std::size_t equals = assignment.find('=');
   const std::size_t dot = assignment.find('.');
-  if (equals == std::string::npos || dot == std::string::npos || dot == 0 || dot + 1 >= equals) {
-    *why = "'" + assignment + "': expected section.key=value (occupancy.resolution_m=0.02)";
-    return false;
-  }
-  const std::string section = assignment.substr(0, dot);
-  const std::string key = assignment.substr(dot + 1, equals - dot - 1);
-  const std::string value = assignment.substr(equals + 1);
-  if (key.find_first_of(".:#{}[], ") != std::string::npos ||
+  const bool has_section_and_key =
+      equals != std::string::npos && dot != std::string::npos && dot > 0 && dot + 1 < equals;
+  const std::string section = has_section_and_key ? assignment.substr(0, dot) : "";
+  const std::string key = has_section_and_key ? assignment.substr(dot + 1, equals - dot - 1) : "";
+  if (!has_section_and_key || key.find_first_of(".:#{}[], ") != std::string::npos ||
       section.find_first_of(":#{}[], ") != std::string::npos) {
     *why = "'" + assignment + "': expected section.key=value (occupancy.resolution_m=0.02)";
     return false;
   }
+  const std::string value = assignment.substr(equals + 1);
   // The same reader as a file's, so the same keys, types and messages: a one-key document.
   YAML::Node value_node;
   try {
@@ -271,6 +269,18 @@ bool SetObjmapConfigKey(const std::string& assignment, ObjmapConfig* config, std
   YAML::Emitter text;
   text << document;
   return ParseObjmapConfig(text.c_str(), config, why);
+}
+
+bool ReadObjmapConfig(const std::string& path, const std::vector<std::string>& assignments,
+                      ObjmapConfig* config, std::string* why) {
+  if (!path.empty() && !LoadObjmapConfig(path, config, why)) return false;
+  for (const std::string& assignment : assignments) {
+    if (!SetObjmapConfigKey(assignment, config, why)) {
+      *why = "--set " + *why;
+      return false;
+    }
+  }
+  return true;
 }
 
 std::string ObjmapConfigToYaml(const ObjmapConfig& config) {

@@ -5,6 +5,7 @@
 // this library links no transport, so every entry point can use it.
 
 #include <string>
+#include <vector>
 
 #include "dataset/keyframe_selector.h"
 #include "detection/centernet_detector.h"
@@ -46,6 +47,13 @@ struct ObjmapConfig {
 /// book]). False with a reason naming the key when it is malformed, unknown or mistyped.
 [[nodiscard]] bool SetObjmapConfigKey(const std::string& assignment, ObjmapConfig* config,
                                       std::string* why);
+
+/// What every entry point reads before its own flags: the file `path` (when not empty, as
+/// LoadObjmapConfig) over `config`, then each "section.key=value" of `assignments` in order
+/// (the --set flags; their reasons start with "--set ").
+[[nodiscard]] bool ReadObjmapConfig(const std::string& path,
+                                    const std::vector<std::string>& assignments,
+                                    ObjmapConfig* config, std::string* why);
 
 /// `config` as YAML in the file's layout (every key, classes by name); parses back to `config`.
 [[nodiscard]] std::string ObjmapConfigToYaml(const ObjmapConfig& config);
