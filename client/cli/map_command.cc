@@ -63,10 +63,10 @@ constexpr char kMapUsage[] =
     "  --min-rotation DEG        keyframe after this much rotation, degrees (keyframes section)\n"
     "  --every-frame             every frame is a keyframe\n"
     "  --every-nth-frame N       frames 0, N, 2N, ... are the keyframes, whatever the motion\n"
-    "  --min-observations N      inventory: keyframes an object needs (default 3)\n"
+    "  --min-evidence E          inventory: evidence an object needs from the views that\n"
+    "                            could see it: + detection score, - misses (default 0.3)\n"
     "  --min-confidence C        inventory: confidence an object needs (default 0.2)\n"
-    "  --min-detection-rate R    inventory: share of the keyframes seeing an object that must\n"
-    "                            detect it (default 0.5; 0 = the paper's rule)\n"
+    "  --min-observations N      inventory: observations an object needs (default 1)\n"
     "                            (the three: inventory section)\n"
     "  --stop-on-error           stop at the first bad frame instead of skipping it\n"
     "  --corrected-poses FILE    after the run, apply these poses as a pose-graph update (lines\n"
@@ -159,10 +159,10 @@ void PrintSummary(const Mapper& mapper, const SequenceRunReport& report, double 
   std::cout << "\nkeyframes: " << report.keyframes.size() << " of " << report.frames_read
             << " frames read; skipped frames: " << report.skipped.size() << "\n";
   std::cout << "objects in the map: " << mapper.objects().size()
-            << ", in the inventory (>= " << mapper.config().inventory.min_observations
-            << " observations, confidence >= " << mapper.config().inventory.min_confidence
-            << ", detected in >= " << mapper.config().inventory.min_detection_rate
-            << " of the keyframes seeing them): " << mapper.ConfirmedObjects().size() << "\n\n";
+            << ", in the inventory (evidence >= " << mapper.config().inventory.min_evidence
+            << ", confidence >= " << mapper.config().inventory.min_confidence
+            << ", observations >= " << mapper.config().inventory.min_observations
+            << "): " << mapper.ConfirmedObjects().size() << "\n\n";
   std::cout << std::left << std::setw(16) << "class" << std::right << std::setw(6) << "count"
             << std::setw(17) << "mean confidence"
             << "\n";
@@ -199,8 +199,8 @@ bool ConfigFrom(Arguments& args, const std::vector<std::string>& assignments, Ob
       static_cast<int>(args.GetNumber("--min-observations", inventory.min_observations));
   inventory.min_confidence =
       static_cast<float>(args.GetNumber("--min-confidence", inventory.min_confidence));
-  inventory.min_detection_rate =
-      static_cast<float>(args.GetNumber("--min-detection-rate", inventory.min_detection_rate));
+  inventory.min_evidence =
+      static_cast<float>(args.GetNumber("--min-evidence", inventory.min_evidence));
   KeyframeSelectorConfig& keyframes = config->keyframes;
   keyframes.min_translation_m = args.GetNumber("--min-translation", keyframes.min_translation_m);
   keyframes.min_rotation_deg = args.GetNumber("--min-rotation", keyframes.min_rotation_deg);
@@ -301,7 +301,7 @@ int RunMapCommand(int argc, char** argv) {
   std::set<std::string> flags_with_value(
       {"--out", "--config", "--set", "--model", "--detections", "--save-detections",
        "--score-threshold", "--first-frame", "--max-frames", "--min-translation", "--min-rotation",
-       "--every-nth-frame", "--min-observations", "--min-confidence", "--min-detection-rate",
+       "--every-nth-frame", "--min-observations", "--min-confidence", "--min-evidence",
        "--corrected-poses", "--trajectory", "--trajectory-tolerance"});
   flags_with_value.merge(MapBagFlags());
   Arguments args(static_cast<int>(words.size()), words.data(), flags_with_value,

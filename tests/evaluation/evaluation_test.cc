@@ -175,6 +175,36 @@ TEST(EvaluateObjects, ModelAccuracyIsTheMeanDistanceToTheSurface) {
   EXPECT_NEAR(with_stray.matches[0].model_to_surface_m, (0.003 * (n - 1) + 0.1) / n, 1e-6);
 }
 
+TEST(EvaluateObjects, WithAMeshModelAccuracyIsTheExactDistanceToItNotToTheSamples) {
+  // A 2 m x 1 m table top (two triangles at z = 0.7) with 2000-like sparse samples: 10 cm apart.
+  GroundTruthObject table = Real(1, "dining table", {1.0, 0.5, 0.7}, {2.0, 1.0, 0.02});
+  table.mesh_vertices_W = {{0, 0, 0.7f}, {2, 0, 0.7f}, {2, 1, 0.7f}, {0, 1, 0.7f}};
+  table.mesh_triangles = {{0, 1, 2}, {0, 2, 3}};
+  for (int i = 0; i <= 20; ++i) {
+    for (int j = 0; j <= 10; ++j) table.surface_W.emplace_back(0.1f * i, 0.1f * j, 0.7f);
+  }
+  MappedObject mapped = Mapped(2, "dining table", {0.2, 0.2, 0.69}, {1.8, 0.8, 0.71});
+  // Model points 4 mm above the top, off the sample grid: 4 mm from the surface, but about 5 cm
+  // from the nearest sample.
+  for (int i = 0; i < 30; ++i) {
+    for (int j = 0; j < 12; ++j) mapped.model_W.emplace_back(0.25f + 0.05f * i, 0.25f + 0.05f * j, 0.704f);
+  }
+  // Points beside the table's edge (x < 0) are as far as the edge, and one point 1 m below is
+  // capped at 10 cm.
+  mapped.model_W.emplace_back(-0.03f, 0.5f, 0.7f);
+  mapped.model_W.emplace_back(1.0f, 0.5f, -0.3f);
+  const double n = static_cast<double>(mapped.model_W.size());
+  const ObjectEvaluation evaluation = EvaluateObjects({table}, {mapped}, EvaluationConfig{});
+  ASSERT_EQ(evaluation.matches.size(), 1u);
+  EXPECT_NEAR(evaluation.matches[0].model_to_surface_m, (0.004 * (n - 2) + 0.03 + 0.1) / n, 1e-5);
+
+  GroundTruthObject samples_only = table;
+  samples_only.mesh_triangles.clear();
+  const ObjectEvaluation by_samples =
+      EvaluateObjects({samples_only}, {mapped}, EvaluationConfig{});
+  EXPECT_GT(by_samples.matches[0].model_to_surface_m, 0.02) << "the samples' spacing shows";
+}
+
 TEST(ScoreCounts, CountsInsideTheRangeAreRightAndTheRestMissesOrFalsePositives) {
   const std::map<int, CountRange> expected = {
       {CocoClassId("chair"), {4, 6}}, {CocoClassId("tv"), {2, 2}}, {CocoClassId("sink"), {1, 1}}};
@@ -289,6 +319,18 @@ TEST_F(EvaluationFiles, GroundTruthIsReadAndBadEntriesAreNamed) {
         "pose": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]}]})");
   EXPECT_FALSE(ReadGroundTruth(no_size, &objects, &why));
   EXPECT_NE(why.find("\"size\""), std::string::npos) << why;
+  const std::string mesh = Write("mesh.json", R"({"objects": [{"id": 1, "class": "cup",
+        "pose": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1], "size": [1, 1, 1],
+        "surface_mesh": {"vertices": [[0,0,0], [1,0,0], [0,1,0]], "triangles": [[0, 1, 2]]}}]})");
+  ASSERT_TRUE(ReadGroundTruth(mesh, &objects, &why)) << why;
+  EXPECT_EQ(objects[0].mesh_vertices_W.size(), 3u);
+  ASSERT_EQ(objects[0].mesh_triangles.size(), 1u);
+  EXPECT_EQ(objects[0].mesh_triangles[0], Eigen::Vector3i(0, 1, 2));
+  const std::string bad_mesh = Write("bad_mesh.json", R"({"objects": [{"id": 1, "class": "cup",
+        "pose": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1], "size": [1, 1, 1],
+        "surface_mesh": {"vertices": [[0,0,0], [1,0,0]], "triangles": [[0, 1, 2]]}}]})");
+  EXPECT_FALSE(ReadGroundTruth(bad_mesh, &objects, &why));
+  EXPECT_NE(why.find("surface_mesh triangle 0 is not 3 indices"), std::string::npos) << why;
   EXPECT_FALSE(ReadGroundTruth(Write("broken.json", "{\"objects\": ["), &objects, &why));
   EXPECT_NE(why.find("not valid JSON"), std::string::npos) << why;
 }

@@ -42,6 +42,13 @@ class MapperScene : public ::testing::Test {
     return testing::RenderFrame(boxes_, K_, Pose(view), "view-" + std::to_string(view));
   }
 
+  // Keyframe k of an every-frame sequence: eye k / 5, moved by 2 mm per frame.
+  RgbdFrame NearFrame(int keyframe) const {
+    Eigen::Isometry3d pose = Pose(keyframe / 5);
+    pose.translation() += Eigen::Vector3d(0.002 * (keyframe % 5), 0, 0);
+    return testing::RenderFrame(boxes_, K_, pose, "near-" + std::to_string(keyframe));
+  }
+
   std::vector<Detection> CupDetections(int view) const {
     return {{Project(boxes_[1], Pose(view)), kCup, 0.6f},
             {Project(boxes_[2], Pose(view)), kCup, 0.5f}};
@@ -81,7 +88,6 @@ TEST_F(MapperScene, TwoCupsSeenThriceAreTwoObjects) {
 
 TEST_F(MapperScene, ObjectsRarelyDetectedWhereSeenAreLeftOutOfTheInventory) {
   MapperConfig config;
-  config.inventory.min_observations = 1;
   Mapper mapper{config};
   for (int view = 0; view < 3; ++view) {
     std::vector<Detection> detections = CupDetections(view);
@@ -92,13 +98,21 @@ TEST_F(MapperScene, ObjectsRarelyDetectedWhereSeenAreLeftOutOfTheInventory) {
   }
   ASSERT_EQ(mapper.objects().size(), 2u);
   for (const auto& [id, object] : mapper.objects().objects()) {
-    EXPECT_EQ(mapper.KeyframesSeeing(object), 3) << "both cups are in every view";
+    const ObjectEvidence evidence = mapper.Evidence(object);
+    EXPECT_EQ(evidence.keyframes_seeing, 3) << "both cups are in every view";
+    EXPECT_EQ(evidence.views_seeing, 3) << "the three eyes lie 25 cm apart: three views";
+    EXPECT_EQ(evidence.views_detecting, static_cast<int>(object.observations.size()));
   }
   const auto confirmed = mapper.ConfirmedObjects();
   ASSERT_EQ(confirmed.size(), 1u);
   EXPECT_EQ(confirmed[0]->observations.size(), 3u);
+  // Detected once (0.5) and missed twice in full view (2 x 0.3) against three detections (0.6).
+  for (const auto& [id, object] : mapper.objects().objects()) {
+    const float expected = object.observations.size() == 3u ? 1.8f : -0.1f;
+    EXPECT_NEAR(mapper.Evidence(object).evidence, expected, 0.02f);
+  }
 
-  config.inventory.min_detection_rate = 0.f;  // the paper's rule keeps both
+  config.inventory.miss_weight = 0.f;  // misses ignored: the paper's rule keeps both
   Mapper paper_mapper{config};
   for (int view = 0; view < 3; ++view) {
     std::vector<Detection> detections = CupDetections(view);
@@ -108,6 +122,65 @@ TEST_F(MapperScene, ObjectsRarelyDetectedWhereSeenAreLeftOutOfTheInventory) {
     ASSERT_TRUE(paper_mapper.AddKeyframe(Frame(view), detections, &result, &why)) << why;
   }
   EXPECT_EQ(paper_mapper.ConfirmedObjects().size(), 2u);
+}
+
+TEST_F(MapperScene, OneGoodViewIsEnoughEvidence) {
+  Mapper mapper{MapperConfig{}};
+  KeyframeResult result;
+  std::string why;
+  ASSERT_TRUE(mapper.AddKeyframe(Frame(0), CupDetections(0), &result, &why)) << why;
+  ASSERT_EQ(mapper.objects().size(), 2u);
+  const auto inventory = mapper.Inventory();
+  ASSERT_EQ(inventory.size(), 1u);
+  EXPECT_EQ(inventory[0].count, 2) << "each cup, detected once at 1.3 m, is in the inventory";
+
+  MapperConfig strict;
+  strict.inventory.min_evidence = 0.55f;  // above the second cup's single score (0.5)
+  Mapper strict_mapper{strict};
+  ASSERT_TRUE(strict_mapper.AddKeyframe(Frame(0), CupDetections(0), &result, &why)) << why;
+  EXPECT_EQ(strict_mapper.ConfirmedObjects().size(), 1u);
+}
+
+TEST_F(MapperScene, RepeatedFramesOfOneViewCountOnceForAndAgainstAnObject) {
+  // Every-frame sampling: each of the three eyes gives five keyframes (a few millimetres
+  // apart). The second cup is detected in the five frames of the first eye and missed in the
+  // ten others: one view for it, two against, as with one keyframe per eye.
+  Mapper dense{MapperConfig{}};
+  for (int keyframe = 0; keyframe < 15; ++keyframe) {
+    const int view = keyframe / 5;
+    const RgbdFrame frame = NearFrame(keyframe);
+    std::vector<Detection> detections = CupDetections(view);
+    if (view > 0) detections.pop_back();
+    KeyframeResult result;
+    std::string why;
+    ASSERT_TRUE(dense.AddKeyframe(frame, detections, &result, &why)) << why;
+  }
+  ASSERT_EQ(dense.objects().size(), 2u);
+  for (const auto& [id, object] : dense.objects().objects()) {
+    const ObjectEvidence evidence = dense.Evidence(object);
+    EXPECT_EQ(evidence.keyframes_seeing, 15);
+    EXPECT_EQ(evidence.views_seeing, 3);
+    const float expected = object.observations.size() == 15u ? 1.8f : -0.1f;
+    EXPECT_NEAR(evidence.evidence, expected, 0.02f);
+  }
+  const auto confirmed = dense.ConfirmedObjects();
+  ASSERT_EQ(confirmed.size(), 1u) << "the rarely detected cup stays out, as with three keyframes";
+  EXPECT_EQ(confirmed[0]->observations.size(), 15u);
+
+  // Without independent views the fifteen frames would be fifteen votes.
+  MapperConfig per_keyframe;
+  per_keyframe.inventory.view_translation_m = 0.f;
+  per_keyframe.inventory.view_rotation_deg = 0.f;
+  Mapper counted{per_keyframe};
+  for (int keyframe = 0; keyframe < 15; ++keyframe) {
+    const RgbdFrame frame = NearFrame(keyframe);
+    KeyframeResult result;
+    std::string why;
+    ASSERT_TRUE(counted.AddKeyframe(frame, CupDetections(keyframe / 5), &result, &why)) << why;
+  }
+  for (const auto& [id, object] : counted.objects().objects()) {
+    EXPECT_EQ(counted.Evidence(object).views_seeing, 15);
+  }
 }
 
 TEST_F(MapperScene, OccupancyHoldsStructureNotObjects) {

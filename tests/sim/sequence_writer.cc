@@ -251,12 +251,22 @@ std::string GroundTruthJson(const Scene& scene, int surface_points, double seen_
       const Eigen::Vector3f q = T_W_O * p;
       samples.push_back({q.x(), q.y(), q.z()});
     }
+    // The surface itself, so that model accuracy is a distance to it, not to the nearest of the
+    // samples (spaced a few centimetres apart on large objects).
+    nlohmann::ordered_json vertices = nlohmann::ordered_json::array();
+    for (const Eigen::Vector3f& p : object.mesh.vertices) {
+      const Eigen::Vector3f q = T_W_O * p;
+      vertices.push_back({q.x(), q.y(), q.z()});
+    }
+    nlohmann::ordered_json triangles = nlohmann::ordered_json::array();
+    for (const Eigen::Vector3i& t : object.mesh.triangles) triangles.push_back({t[0], t[1], t[2]});
     objects.push_back({{"id", object.id},
                        {"class", std::string(CocoClassName(object.class_id))},
                        {"name", object.name},
                        {"pose", pose},
                        {"size", {size.x(), size.y(), size.z()}},
-                       {"surface_sample", samples}});
+                       {"surface_sample", samples},
+                       {"surface_mesh", {{"vertices", vertices}, {"triangles", triangles}}}});
   }
   return nlohmann::ordered_json{{"kind", scene.kind},
                                 {"seed", scene.seed},

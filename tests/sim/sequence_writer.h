@@ -45,7 +45,8 @@ struct DetectorNoiseConfig {
                                                          std::uint64_t seed, int frame_index);
 
 /// ground_truth.json of the scene: per object id, class, name, box pose (4x4 row by row) and
-/// size (metres) from its mesh, and `surface_points` samples of its surface (world frame).
+/// size (metres) from its mesh, `surface_points` samples of its surface and the surface mesh
+/// itself (vertices and triangles, world frame).
 [[nodiscard]] std::string GroundTruthJson(const Scene& scene, int surface_points);
 
 /// Odometry drift: the poses written with the frames are what a drifting tracker reports; the

@@ -71,10 +71,16 @@ void VisitMapModel(MapperConfig* m, Visitor& v) {
   v("threads_per_scan", &o.threads_per_scan);
   InventoryConfig& i = m->inventory;
   v.Section("inventory");
-  v("min_observations", &i.min_observations);
+  v("min_evidence", &i.min_evidence);
+  v("miss_weight", &i.miss_weight);
   v("min_confidence", &i.min_confidence);
-  v("min_detection_rate", &i.min_detection_rate);
+  v("min_observations", &i.min_observations);
+  v("detectable_area_px", &i.detectable_area_px);
   v("occlusion_margin_m", &i.occlusion_margin_m);
+  v("occlusion_margin_per_m2", &i.occlusion_margin_per_m2);
+  v("view_translation_m", &i.view_translation_m);
+  v("view_rotation_deg", &i.view_rotation_deg);
+  v("max_visibility_points", &i.max_visibility_points);
   ReassociationConfig& r = m->reassociation;
   v.Section("reassociation");
   v("enabled", &r.enabled);

@@ -124,6 +124,105 @@ class PointGrid {
   std::unordered_map<std::int64_t, std::vector<Eigen::Vector3f>> cells_;
 };
 
+// Closest point to `p` on triangle (a, b, c): the region of the triangle's Voronoi diagram that
+// holds p decides between a corner, an edge and the face.
+Eigen::Vector3f ClosestOnTriangle(const Eigen::Vector3f& p, const Eigen::Vector3f& a,
+                                  const Eigen::Vector3f& b, const Eigen::Vector3f& c) {
+  const Eigen::Vector3f ab = b - a, ac = c - a, ap = p - a;
+  const float d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0.f && d2 <= 0.f) return a;
+  const Eigen::Vector3f bp = p - b;
+  const float d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0.f && d4 <= d3) return b;
+  const float vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.f && d1 >= 0.f && d3 <= 0.f) return a + ab * (d1 / (d1 - d3));
+  const Eigen::Vector3f cp = p - c;
+  const float d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0.f && d5 <= d6) return c;
+  const float vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.f && d2 >= 0.f && d6 <= 0.f) return a + ac * (d2 / (d2 - d6));
+  const float va = d3 * d6 - d5 * d4;
+  if (va <= 0.f && (d4 - d3) >= 0.f && (d5 - d6) >= 0.f) {
+    return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+  }
+  const float denominator = va + vb + vc;
+  if (!(std::abs(denominator) > 0.f)) return a;  // degenerate triangle
+  return a + ab * (vb / denominator) + ac * (vc / denominator);
+}
+
+// Exact distances to a triangle mesh through a hash grid: each triangle is listed in the cells
+// its bounding box overlaps; a query searches rings of cells outwards and stops once the ring
+// cannot hold anything nearer than the best found.
+class TriangleGrid {
+ public:
+  TriangleGrid(const std::vector<Eigen::Vector3f>& vertices,
+               const std::vector<Eigen::Vector3i>& triangles, double cell_m)
+      : vertices_(vertices), triangles_(triangles), cell_m_(cell_m) {
+    for (std::size_t t = 0; t < triangles.size(); ++t) {
+      const Eigen::Vector3i& tri = triangles[t];
+      const Eigen::Vector3f lo =
+          vertices[tri[0]].cwiseMin(vertices[tri[1]]).cwiseMin(vertices[tri[2]]);
+      const Eigen::Vector3f hi =
+          vertices[tri[0]].cwiseMax(vertices[tri[1]]).cwiseMax(vertices[tri[2]]);
+      const Eigen::Vector3i a = Cell(lo), b = Cell(hi);
+      for (int x = a.x(); x <= b.x(); ++x) {
+        for (int y = a.y(); y <= b.y(); ++y) {
+          for (int z = a.z(); z <= b.z(); ++z) {
+            cells_[PackVoxel({x, y, z})].push_back(static_cast<int>(t));
+          }
+        }
+      }
+    }
+  }
+
+  // Distance to the nearest triangle, capped at `cap_m`.
+  [[nodiscard]] double Distance(const Eigen::Vector3f& p, double cap_m) const {
+    const Eigen::Vector3i centre = Cell(p);
+    const int reach = static_cast<int>(std::ceil(cap_m / cell_m_));
+    double best2 = cap_m * cap_m;
+    for (int ring = 0; ring <= reach; ++ring) {
+      // Everything in this ring or beyond lies at least (ring - 1) cells away.
+      const double ring_min = std::max(0, ring - 1) * cell_m_;
+      if (ring_min * ring_min >= best2) break;
+      for (int dx = -ring; dx <= ring; ++dx) {
+        for (int dy = -ring; dy <= ring; ++dy) {
+          for (int dz = -ring; dz <= ring; ++dz) {
+            if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != ring) continue;
+            auto it = cells_.find(PackVoxel(centre + Eigen::Vector3i(dx, dy, dz)));
+            if (it == cells_.end()) continue;
+            for (int t : it->second) {
+              const Eigen::Vector3i& tri = triangles_[t];
+              const Eigen::Vector3f q =
+                  ClosestOnTriangle(p, vertices_[tri[0]], vertices_[tri[1]], vertices_[tri[2]]);
+              best2 = std::min(best2, static_cast<double>((p - q).squaredNorm()));
+            }
+          }
+        }
+      }
+    }
+    return std::sqrt(best2);
+  }
+
+ private:
+  [[nodiscard]] Eigen::Vector3i Cell(const Eigen::Vector3f& p) const {
+    return VoxelOf(p.cast<double>(), cell_m_);
+  }
+  const std::vector<Eigen::Vector3f>& vertices_;
+  const std::vector<Eigen::Vector3i>& triangles_;
+  double cell_m_;
+  std::unordered_map<std::int64_t, std::vector<int>> cells_;
+};
+
+// Mean capped distance from every point of `from` to the mesh; negative when either is empty.
+double MeanDistanceToMesh(const std::vector<Eigen::Vector3f>& from,
+                          const GroundTruthObject& real, double cap_m) {
+  if (from.empty() || real.mesh_triangles.empty()) return -1.0;
+  const TriangleGrid grid(real.mesh_vertices_W, real.mesh_triangles, 0.02);
+  double sum = 0.0;
+  for (const Eigen::Vector3f& p : from) sum += grid.Distance(p, cap_m);
+  return sum / static_cast<double>(from.size());
+}
+
 // Mean capped distance from every point of `from` to `to`; negative when either is empty.
 double MeanDistance(const std::vector<Eigen::Vector3f>& from,
                     const std::vector<Eigen::Vector3f>& to, double cap_m) {
@@ -223,7 +322,9 @@ ObjectEvaluation EvaluateObjects(const std::vector<GroundTruthObject>& real,
     match.real_id = real[r].id;
     match.mapped_id = mapped[m].id;
     match.model_to_surface_m =
-        MeanDistance(mapped[m].model_W, real[r].surface_W, config.max_model_distance_m);
+        real[r].mesh_triangles.empty()
+            ? MeanDistance(mapped[m].model_W, real[r].surface_W, config.max_model_distance_m)
+            : MeanDistanceToMesh(mapped[m].model_W, real[r], config.max_model_distance_m);
     match.surface_to_model_m =
         MeanDistance(real[r].surface_W, mapped[m].model_W, config.max_model_distance_m);
     if (match.model_to_surface_m >= 0.0) accuracies.push_back(match.model_to_surface_m);

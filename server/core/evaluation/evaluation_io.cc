@@ -1,5 +1,6 @@
 #include "evaluation/evaluation_io.h"
 
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -109,6 +110,42 @@ bool ReadGroundTruthObject(const Json& entry, const std::string& where, GroundTr
     if (!sample.is_array()) {
       *why = where + ": \"surface_sample\" must be an array of [x, y, z]";
       return false;
+    }
+  }
+  if (entry.contains("surface_mesh")) {
+    const Json& mesh = entry["surface_mesh"];
+    if (!mesh.is_object() || !mesh.contains("vertices") || !mesh.contains("triangles") ||
+        !mesh["vertices"].is_array() || !mesh["triangles"].is_array()) {
+      *why = where + ": \"surface_mesh\" must hold \"vertices\" [[x, y, z], ...] and " +
+             "\"triangles\" [[i, j, k], ...]";
+      return false;
+    }
+    const Json& vertices = mesh["vertices"];
+    for (std::size_t i = 0; i < vertices.size(); ++i) {
+      Eigen::Vector3d p;
+      if (!Vector3(vertices[i], &p)) {
+        *why = where + ": surface_mesh vertex " + std::to_string(i) + " is not 3 finite numbers";
+        return false;
+      }
+      object->mesh_vertices_W.push_back(p.cast<float>());
+    }
+    const Json& triangles = mesh["triangles"];
+    const auto vertex_count = static_cast<std::int64_t>(vertices.size());
+    for (std::size_t i = 0; i < triangles.size(); ++i) {
+      const Json& t = triangles[i];
+      bool valid = t.is_array() && t.size() == 3;
+      Eigen::Vector3i corners = Eigen::Vector3i::Zero();
+      for (int k = 0; valid && k < 3; ++k) {
+        valid = t[k].is_number_integer() && t[k].get<std::int64_t>() >= 0 &&
+                t[k].get<std::int64_t>() < vertex_count;
+        if (valid) corners[k] = t[k].get<int>();
+      }
+      if (!valid) {
+        *why = where + ": surface_mesh triangle " + std::to_string(i) +
+               " is not 3 indices of its vertices";
+        return false;
+      }
+      object->mesh_triangles.push_back(corners);
     }
   }
   return true;

@@ -14,7 +14,9 @@ namespace objmap {
 ///   {"objects": [{"id": 1, "class": "cup",
 ///                 "pose": [16 numbers: the 4x4 box-to-world transform, row by row],
 ///                 "size": [x, y, z] (box extents along its axes, metres),
-///                 "surface_sample": [[x, y, z], ...] (world frame; optional)}, ...]}
+///                 "surface_sample": [[x, y, z], ...] (world frame; optional),
+///                 "surface_mesh": {"vertices": [[x, y, z], ...], "triangles": [[i, j, k], ...]}
+///                 (world frame; optional: model accuracy is then measured to it)}, ...]}
 /// Classes are COCO names.
 [[nodiscard]] bool ReadGroundTruth(const std::string& path, std::vector<GroundTruthObject>* objects,
                                    std::string* why);

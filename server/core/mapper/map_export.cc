@@ -13,7 +13,8 @@ namespace {
 
 nlohmann::json Vector(const Eigen::Vector3f& v) { return {v.x(), v.y(), v.z()}; }
 
-nlohmann::json ObjectJson(const MapObject& object, bool in_inventory, int keyframes_seeing) {
+nlohmann::json ObjectJson(const MapObject& object, bool in_inventory,
+                          const ObjectEvidence& evidence) {
   nlohmann::json scores = nlohmann::json::object();
   for (int c = 0; c < kNumCocoClasses; ++c) {
     if (object.accumulated_scores[c] > 0.f) {
@@ -38,7 +39,10 @@ nlohmann::json ObjectJson(const MapObject& object, bool in_inventory, int keyfra
           {"confidence", object.Confidence()},
           {"in_inventory", in_inventory},
           {"scores", scores},
-          {"keyframes_seeing", keyframes_seeing},
+          {"evidence", evidence.evidence},
+          {"keyframes_seeing", evidence.keyframes_seeing},
+          {"views_seeing", evidence.views_seeing},
+          {"views_detecting", evidence.views_detecting},
           {"observations", observations},
           {"centroid", Vector(object.centroid_W)},
           {"bbox_min", Vector(object.min_W)},
@@ -58,7 +62,7 @@ std::string ObjectsJson(const Mapper& mapper) {
   const std::set<ObjectId> confirmed = ConfirmedIds(mapper);
   nlohmann::json objects = nlohmann::json::array();
   for (const auto& [id, object] : mapper.objects().objects()) {
-    objects.push_back(ObjectJson(object, confirmed.count(id) > 0, mapper.KeyframesSeeing(object)));
+    objects.push_back(ObjectJson(object, confirmed.count(id) > 0, mapper.Evidence(object)));
   }
   nlohmann::json inventory = nlohmann::json::array();
   for (const InventoryEntry& entry : mapper.Inventory()) {

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <iterator>
 #include <mutex>
 #include <optional>
 #include <set>
@@ -156,18 +157,6 @@ bool IsRigidCorrection(const std::map<KeyframeId, KeyframeRecord>& keyframes,
 
 }  // namespace
 
-bool InventoryConfig::IsValid(std::string* why) const {
-  if (min_observations < 1 || !(min_confidence >= 0.f && min_confidence <= 1.f)) {
-    *why = "InventoryConfig: min_observations must be >= 1 and min_confidence in [0, 1]";
-    return false;
-  }
-  if (!(min_detection_rate >= 0.f && min_detection_rate <= 1.f) || !(occlusion_margin_m >= 0.f)) {
-    *why = "InventoryConfig: min_detection_rate must be in [0, 1] and occlusion_margin_m >= 0";
-    return false;
-  }
-  return true;
-}
-
 bool ReassociationConfig::IsValid(std::string* why) const {
   if (!(min_translation_m >= 0.f) || !(min_rotation_rad >= 0.f)) {
     *why = "ReassociationConfig: min_translation_m and min_rotation_rad must be >= 0";
@@ -234,6 +223,19 @@ struct Mapper::Impl {
   // Camera-frame reach of each keyframe's rays (ReachInCameraFrame), filled when first needed.
   std::map<KeyframeId, Eigen::AlignedBox3d> reach_C;
 
+  // What each keyframe sees of each object, for its evidence: valid for one model version of the
+  // object and the keyframes' current poses (cleared when poses change). Keyframes are evaluated
+  // once each, in id order, so an unchanged object costs only the keyframes added since.
+  struct ObjectVisibilityCache {
+    std::uint64_t model_version = 0;
+    KeyframeId evaluated_through = 0;
+    std::map<KeyframeId, ObjectVisibility> seen;  // keyframes that see some of it
+  };
+  mutable std::map<ObjectId, ObjectVisibilityCache> visibility_cache;
+
+  const std::map<KeyframeId, ObjectVisibility>& VisibilityOf(const MapObject& object) const;
+  std::map<KeyframeId, int> ViewsOfKeyframes() const;
+
   void Reassociate();
   KeyframePoseLookup PoseLookup() const;
   void RebuildOccupancy();
@@ -242,6 +244,34 @@ struct Mapper::Impl {
                            PoseUpdateReport* report);
   bool RestoreOccupancy(const OccupancyCheckpoint& checkpoint, int* integrated, std::string* why);
 };
+
+const std::map<KeyframeId, ObjectVisibility>& Mapper::Impl::VisibilityOf(
+    const MapObject& object) const {
+  ObjectVisibilityCache& cache = visibility_cache[object.id];
+  if (cache.model_version != object.version) cache = ObjectVisibilityCache{object.version, 0, {}};
+  if (!keyframes.empty() && keyframes.rbegin()->first > cache.evaluated_through) {
+    const std::vector<Eigen::Vector3f> samples =
+        VisibilitySamples(object, config.inventory.max_visibility_points);
+    // What lies within 2 cm of the model's bounds is the object itself (depth noise at its edges).
+    const Eigen::AlignedBox3f bounds_W(object.min_W - Eigen::Vector3f::Constant(0.02f),
+                                       object.max_W + Eigen::Vector3f::Constant(0.02f));
+    for (auto it = keyframes.upper_bound(cache.evaluated_through); it != keyframes.end(); ++it) {
+      const KeyframeRecord& record = it->second;
+      const ObjectVisibility seen =
+          VisibilityIn(samples, bounds_W, record.T_W_C, record.intrinsics, record.depth_mm,
+                       config.inventory);
+      if (seen.visible_fraction > 0.f) cache.seen[it->first] = seen;
+    }
+    cache.evaluated_through = keyframes.rbegin()->first;
+  }
+  return cache.seen;
+}
+
+std::map<KeyframeId, int> Mapper::Impl::ViewsOfKeyframes() const {
+  std::map<KeyframeId, Eigen::Isometry3d> poses;
+  for (const auto& [id, record] : keyframes) poses.emplace(id, record.T_W_C);
+  return IndependentViews(poses, config.inventory);
+}
 
 KeyframePoseLookup Mapper::Impl::PoseLookup() const {
   return [this](KeyframeId id) -> std::optional<Eigen::Isometry3d> {
@@ -316,6 +346,7 @@ void Mapper::Impl::Reassociate() {
   objects.Restore(std::move(regrouped), next_id, PoseLookup());
   // Ids now name other models: drop the search structures cached for the old ones.
   associator = Associator(config.association);
+  visibility_cache.clear();
 }
 
 // The checkpoint's OctoMap plus the keyframes after it, when the checkpoint still describes the
@@ -487,6 +518,7 @@ bool Mapper::UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses, s
     moved.insert(id);
   }
   report->keyframes_moved = static_cast<int>(moved.size());
+  if (!moved.empty()) impl_->visibility_cache.clear();  // seen from other places now
   if (moved.empty()) {
     report->objects_after = report->objects_before;
     return true;
@@ -512,6 +544,7 @@ RestoreOutcome Mapper::Restore(std::map<KeyframeId, KeyframeRecord> keyframes,
                                ObjectId next_object_id, const OccupancyCheckpoint* checkpoint) {
   impl_->keyframes = std::move(keyframes);
   impl_->reach_C.clear();
+  impl_->visibility_cache.clear();
   impl_->next_keyframe_id =
       impl_->keyframes.empty() ? 1 : impl_->keyframes.rbegin()->first + 1;
   impl_->objects.Restore(std::move(observations), next_object_id, impl_->PoseLookup());
@@ -545,38 +578,28 @@ void Mapper::ReadOccupancy(const std::function<void(const OccupancyMap&)>& read)
   read(*impl_->occupancy);
 }
 
-int Mapper::KeyframesSeeing(const MapObject& object) const {
-  const Eigen::Vector3d centroid_W = object.centroid_W.cast<double>();
-  int seeing = 0;
-  for (const auto& [id, record] : impl_->keyframes) {
-    const Eigen::Vector3d c_C = record.T_W_C.inverse() * centroid_W;
-    if (c_C.z() <= 0.0) continue;
-    const CameraIntrinsics& K = record.intrinsics;
-    const int u = static_cast<int>(std::lround(K.fx * c_C.x() / c_C.z() + K.cx));
-    const int v = static_cast<int>(std::lround(K.fy * c_C.y() / c_C.z() + K.cy));
-    if (u < 0 || v < 0 || u >= K.width || v >= K.height) continue;
-    const std::uint16_t depth_mm = record.depth_mm[static_cast<std::size_t>(v) * K.width + u];
-    if (depth_mm == 0) continue;  // no depth: cannot tell whether it is occluded
-    if (depth_mm * 0.001 < c_C.z() - impl_->config.inventory.occlusion_margin_m) continue;
-    ++seeing;
-  }
-  return seeing;
+ObjectEvidence Mapper::Evidence(const MapObject& object) const {
+  return EvidenceOf(object, impl_->VisibilityOf(object), impl_->ViewsOfKeyframes(),
+                    impl_->config.inventory);
 }
 
 std::vector<const MapObject*> Mapper::ConfirmedObjects() const {
-  std::vector<const MapObject*> confirmed;
   const InventoryConfig& thresholds = impl_->config.inventory;
+  const std::map<KeyframeId, int> views = impl_->ViewsOfKeyframes();
+  // Objects merged away or re-associated since: their cached visibility is of no use.
+  for (auto it = impl_->visibility_cache.begin(); it != impl_->visibility_cache.end();) {
+    it = impl_->objects.Find(it->first) == nullptr ? impl_->visibility_cache.erase(it)
+                                                   : std::next(it);
+  }
+  std::vector<const MapObject*> confirmed;
   for (const auto& [id, object] : impl_->objects.objects()) {
-    const int observed = static_cast<int>(object.Keyframes().size());
     if (static_cast<int>(object.observations.size()) < thresholds.min_observations ||
         object.Confidence() < thresholds.min_confidence) {
       continue;
     }
-    if (thresholds.min_detection_rate > 0.f &&
-        observed < thresholds.min_detection_rate * std::max(observed, KeyframesSeeing(object))) {
-      continue;
-    }
-    confirmed.push_back(&object);
+    const ObjectEvidence evidence =
+        EvidenceOf(object, impl_->VisibilityOf(object), views, thresholds);
+    if (evidence.evidence >= thresholds.min_evidence) confirmed.push_back(&object);
   }
   return confirmed;
 }

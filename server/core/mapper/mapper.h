@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "association/associator.h"
+#include "mapper/object_evidence.h"
 #include "objects/object_map.h"
 #include "occupancy/occupancy_map.h"
 #include "segmentation/segmenter.h"
@@ -16,24 +17,6 @@
 #include "types/frame.h"
 
 namespace objmap {
-
-/// Which objects count in the inventory: the paper's final confidence threshold plus a minimum
-/// number of observations, which separates real objects from one-off detector mistakes.
-struct InventoryConfig {
-  /// Objects seen in fewer keyframes are left out of the inventory (still kept in the map).
-  int min_observations = 3;
-  /// Objects whose confidence (max accumulated score / observations) is lower are left out.
-  float min_confidence = 0.2f;
-  /// Objects detected in fewer than this share of the keyframes whose view holds their centroid
-  /// unoccluded are left out: a one-off mistake repeated a few times over a long sequence is
-  /// still rare, a real object is detected in a good part of the views that see it. 0 disables.
-  float min_detection_rate = 0.5f;
-  /// A keyframe sees an object when the depth at its centroid's pixel is at most this much in
-  /// front of the centroid (otherwise something occludes it), metres.
-  float occlusion_margin_m = 0.15f;
-
-  [[nodiscard]] bool IsValid(std::string* why) const;
-};
 
 /// Whether a pose update re-associates the objects. Association depends on where the keyframes
 /// are relative to each other: after a loop closure bends the trajectory, segments that drift
@@ -222,10 +205,12 @@ class Mapper {
   /// Runs `read` on the OctoMap under a shared lock (safe from any thread, see the class note).
   void ReadOccupancy(const std::function<void(const OccupancyMap&)>& read) const;
 
-  /// Keyframes whose view holds the object's centroid, unoccluded (InventoryConfig).
-  [[nodiscard]] int KeyframesSeeing(const MapObject& object) const;
+  /// The object's existence evidence from every keyframe that could see it (InventoryConfig).
+  /// Visibility is cached per object model and keyframe, so repeated calls cost only the
+  /// keyframes added and the objects changed since.
+  [[nodiscard]] ObjectEvidence Evidence(const MapObject& object) const;
 
-  /// Objects that pass the inventory thresholds, by id.
+  /// Objects that pass the inventory thresholds (evidence, confidence), by id.
   [[nodiscard]] std::vector<const MapObject*> ConfirmedObjects() const;
   /// Per-class counts of the confirmed objects, most frequent first.
   [[nodiscard]] std::vector<InventoryEntry> Inventory() const;

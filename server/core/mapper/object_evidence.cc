@@ -1,0 +1,166 @@
+#include "mapper/object_evidence.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace objmap {
+
+bool InventoryConfig::IsValid(std::string* why) const {
+  if (!(min_evidence >= 0.f) || !(miss_weight >= 0.f)) {
+    *why = "InventoryConfig: min_evidence and miss_weight must be >= 0";
+    return false;
+  }
+  if (min_observations < 1 || !(min_confidence >= 0.f && min_confidence <= 1.f)) {
+    *why = "InventoryConfig: min_observations must be >= 1 and min_confidence in [0, 1]";
+    return false;
+  }
+  if (!(detectable_area_px > 0.f)) {
+    *why = "InventoryConfig: detectable_area_px must be positive";
+    return false;
+  }
+  if (!(occlusion_margin_m >= 0.f) || !(occlusion_margin_per_m2 >= 0.f)) {
+    *why = "InventoryConfig: occlusion_margin_m and occlusion_margin_per_m2 must be >= 0";
+    return false;
+  }
+  if (!(view_translation_m >= 0.f) || !(view_rotation_deg >= 0.f)) {
+    *why = "InventoryConfig: view_translation_m and view_rotation_deg must be >= 0";
+    return false;
+  }
+  if (max_visibility_points < 1) {
+    *why = "InventoryConfig: max_visibility_points must be >= 1";
+    return false;
+  }
+  return true;
+}
+
+std::vector<Eigen::Vector3f> VisibilitySamples(const MapObject& object, int max_points) {
+  const std::size_t size = object.model_W.size();
+  const std::size_t step =
+      std::max<std::size_t>(1, (size + static_cast<std::size_t>(max_points) - 1) /
+                                   static_cast<std::size_t>(max_points));
+  std::vector<Eigen::Vector3f> samples;
+  samples.reserve(std::min(size, static_cast<std::size_t>(max_points)));
+  std::size_t index = 0;
+  object.model_W.ForEachPoint([&](const Eigen::Vector3f& p) {
+    if (index++ % step == 0) samples.push_back(p);
+    return true;
+  });
+  return samples;
+}
+
+ObjectVisibility VisibilityIn(const std::vector<Eigen::Vector3f>& samples_W,
+                              const Eigen::AlignedBox3f& bounds_W, const Eigen::Isometry3d& T_W_C,
+                              const CameraIntrinsics& intrinsics,
+                              const std::vector<std::uint16_t>& depth_mm,
+                              const InventoryConfig& config) {
+  ObjectVisibility visibility;
+  if (samples_W.empty()) return visibility;
+  const Eigen::Isometry3f T_C_W = T_W_C.inverse().cast<float>();
+  const Eigen::Isometry3f T_W_C_f = T_W_C.cast<float>();
+  const float fx = static_cast<float>(intrinsics.fx), fy = static_cast<float>(intrinsics.fy);
+  const float cx = static_cast<float>(intrinsics.cx), cy = static_cast<float>(intrinsics.cy);
+  const int width = intrinsics.width, height = intrinsics.height;
+  int visible = 0;
+  int u_min = width, u_max = -1, v_min = height, v_max = -1;
+  for (const Eigen::Vector3f& p_W : samples_W) {
+    const Eigen::Vector3f p_C = T_C_W * p_W;
+    if (!(p_C.z() > 0.01f)) continue;
+    const float u_f = fx * p_C.x() / p_C.z() + cx;
+    const float v_f = fy * p_C.y() / p_C.z() + cy;
+    if (!(u_f >= 0.f && v_f >= 0.f && u_f < static_cast<float>(width) &&
+          v_f < static_cast<float>(height))) {
+      continue;
+    }
+    const int u = static_cast<int>(u_f), v = static_cast<int>(v_f);
+    const std::uint16_t measured_mm = depth_mm[static_cast<std::size_t>(v) * width + u];
+    if (measured_mm == 0) continue;  // no depth: the view cannot tell whether it is there
+    const float measured_m = measured_mm * 0.001f;
+    const float margin_m =
+        config.occlusion_margin_m + config.occlusion_margin_per_m2 * measured_m * measured_m;
+    // Depth well in front of the point: something hides it, unless that something lies within
+    // the object's own bounds (its front hiding its back still shows the object). Depth at or
+    // behind it: the view saw the point's place (the object, or through where it should be).
+    if (measured_m < p_C.z() - margin_m) {
+      const Eigen::Vector3f measured_C = p_C * (measured_m / p_C.z());
+      if (!bounds_W.contains(T_W_C_f * measured_C)) continue;
+    }
+    ++visible;
+    u_min = std::min(u_min, u);
+    u_max = std::max(u_max, u);
+    v_min = std::min(v_min, v);
+    v_max = std::max(v_max, v);
+  }
+  visibility.visible_fraction = static_cast<float>(visible) / static_cast<float>(samples_W.size());
+  if (visible > 0) {
+    visibility.projected_area_px = static_cast<float>((u_max - u_min + 1) * (v_max - v_min + 1));
+  }
+  return visibility;
+}
+
+std::map<KeyframeId, int> IndependentViews(const std::map<KeyframeId, Eigen::Isometry3d>& poses,
+                                           const InventoryConfig& config) {
+  std::map<KeyframeId, int> view_of;
+  const double max_rotation_rad = config.view_rotation_deg * M_PI / 180.0;
+  const Eigen::Isometry3d* anchor = nullptr;
+  int view = -1;
+  for (const auto& [id, T_W_C] : poses) {
+    bool same_view = false;
+    if (anchor != nullptr) {
+      const Eigen::Isometry3d delta = anchor->inverse() * T_W_C;
+      same_view = delta.translation().norm() <= config.view_translation_m &&
+                  Eigen::AngleAxisd(delta.linear()).angle() <= max_rotation_rad;
+    }
+    if (!same_view) {
+      anchor = &T_W_C;
+      ++view;
+    }
+    view_of[id] = view;
+  }
+  return view_of;
+}
+
+ObjectEvidence EvidenceOf(const MapObject& object,
+                          const std::map<KeyframeId, ObjectVisibility>& visibility,
+                          const std::map<KeyframeId, int>& view_of_keyframe,
+                          const InventoryConfig& config) {
+  // The best score any detection of this object had in each keyframe.
+  std::map<KeyframeId, float> detected;
+  for (const ObjectObservation& observation : object.observations) {
+    float best = 0.f;
+    for (const auto& [class_id, score] : observation.class_scores) best = std::max(best, score);
+    float& entry = detected[observation.keyframe_id];
+    entry = std::max(entry, best);
+  }
+  struct ViewSum {
+    double sum = 0.0;
+    int keyframes = 0;
+    bool detecting = false;
+  };
+  std::map<int, ViewSum> views;
+  ObjectEvidence evidence;
+  auto add = [&](KeyframeId keyframe, double value, bool detecting) {
+    auto view = view_of_keyframe.find(keyframe);
+    if (view == view_of_keyframe.end()) return;
+    ViewSum& sum = views[view->second];
+    sum.sum += value;
+    ++sum.keyframes;
+    sum.detecting = sum.detecting || detecting;
+    ++evidence.keyframes_seeing;
+  };
+  for (const auto& [keyframe, score] : detected) add(keyframe, score, true);
+  for (const auto& [keyframe, seen] : visibility) {
+    if (detected.count(keyframe) > 0 || !(seen.visible_fraction > 0.f)) continue;
+    const float detectability = std::min(1.f, seen.projected_area_px / config.detectable_area_px);
+    add(keyframe, -config.miss_weight * seen.visible_fraction * detectability, false);
+  }
+  double total = 0.0;
+  for (const auto& [view, sum] : views) {
+    total += sum.sum / sum.keyframes;
+    if (sum.detecting) ++evidence.views_detecting;
+  }
+  evidence.evidence = static_cast<float>(total);
+  evidence.views_seeing = static_cast<int>(views.size());
+  return evidence;
+}
+
+}  // namespace objmap

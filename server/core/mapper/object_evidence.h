@@ -1,0 +1,101 @@
+#pragma once
+// Existence evidence of map objects: which keyframes could see an object, and what their
+// detector said of it. An object earns its place in the inventory from the views that could have
+// detected it, not from a count of detections, so the inventory does not depend on how densely
+// keyframes are sampled.
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "objects/object_map.h"
+#include "types/frame.h"
+
+namespace objmap {
+
+/// Which objects count in the inventory. Each group of keyframes that look at the scene from
+/// about the same place (one independent view, see the view_* keys) adds, for an object it could
+/// see, the mean over its keyframes of: the detection score where the object was detected, and
+/// -miss_weight x visible fraction x detectability where it was visible and not detected.
+/// Keyframes that could not see the object (outside the image, occluded, no depth) add nothing.
+/// The object is in the inventory when that evidence reaches min_evidence: one good close view
+/// of a mug can do it, thirty views of a rare false detection among many views that see the same
+/// place cannot.
+struct InventoryConfig {
+  /// Evidence an object needs (one detection with score s alone gives s).
+  float min_evidence = 0.3f;
+  /// What a view that could see the object and did not detect it costs, at full visibility and
+  /// detectability. A view that detects it gains its score, so an object is kept when its
+  /// detection rate r over the views that see it satisfies r * score > miss_weight * (1 - r).
+  float miss_weight = 0.3f;
+  /// Objects whose confidence (max accumulated class score / observations) is lower are left out
+  /// (the paper's final threshold).
+  float min_confidence = 0.2f;
+  /// Objects with fewer observations are left out; 1 leaves it to the evidence.
+  int min_observations = 1;
+  /// Projected area (pixels of the box around the visible part) at which a detector is expected
+  /// to find an object; smaller views cost proportionally less when they miss it. 1024 = 32 x 32,
+  /// COCO's bound of a small object, below which detectors' recall drops steeply.
+  float detectable_area_px = 1024.f;
+  /// A model point counts as hidden when the measured depth at its pixel is more than this (plus
+  /// occlusion_margin_per_m2 x depth squared, the sensor's noise) in front of it, metres.
+  float occlusion_margin_m = 0.05f;
+  float occlusion_margin_per_m2 = 0.01f;
+  /// Keyframes whose camera lies within this distance and rotation of the first keyframe of a
+  /// group are one view: frames a few centimetres apart see the same thing, so taking every frame
+  /// instead of every tenth must not count a detection (or a miss) ten times. The defaults are
+  /// the motion keyframe policy's (keyframes section).
+  float view_translation_m = 0.10f;
+  float view_rotation_deg = 10.f;
+  /// The visibility of an object is measured on at most this many evenly spaced model points.
+  int max_visibility_points = 256;
+
+  [[nodiscard]] bool IsValid(std::string* why) const;
+};
+
+/// What one keyframe could see of an object.
+struct ObjectVisibility {
+  /// Share of the object's sample points that project into the image with depth measured at or
+  /// behind them (not hidden by something nearer); points without depth do not count.
+  float visible_fraction = 0.f;
+  /// Area of the pixel box around the visible points.
+  float projected_area_px = 0.f;
+};
+
+/// Evenly spaced points of the object's model, at most `max_points`.
+[[nodiscard]] std::vector<Eigen::Vector3f> VisibilitySamples(const MapObject& object,
+                                                             int max_points);
+
+/// How much of `samples_W` (points of an object within `bounds_W`) a keyframe with this pose,
+/// intrinsics and depth (millimetres, row-major, 0: none) sees.
+[[nodiscard]] ObjectVisibility VisibilityIn(const std::vector<Eigen::Vector3f>& samples_W,
+                                            const Eigen::AlignedBox3f& bounds_W,
+                                            const Eigen::Isometry3d& T_W_C,
+                                            const CameraIntrinsics& intrinsics,
+                                            const std::vector<std::uint16_t>& depth_mm,
+                                            const InventoryConfig& config);
+
+/// Groups keyframes (ascending ids, with their poses) into independent views: a keyframe starts a
+/// new group when it lies farther than view_translation_m or view_rotation_deg from the first
+/// keyframe of the current group. Returns the group index of each keyframe.
+[[nodiscard]] std::map<KeyframeId, int> IndependentViews(
+    const std::map<KeyframeId, Eigen::Isometry3d>& poses, const InventoryConfig& config);
+
+/// An object's evidence and what it was made of.
+struct ObjectEvidence {
+  float evidence = 0.f;
+  int keyframes_seeing = 0;  ///< keyframes that saw it (visible) or detected it
+  int views_seeing = 0;      ///< independent views among them
+  int views_detecting = 0;   ///< independent views with at least one detection of it
+};
+
+/// The evidence of `object` from its visibility in each keyframe (keyframes missing from
+/// `visibility` saw nothing of it) and the keyframes' independent views.
+[[nodiscard]] ObjectEvidence EvidenceOf(const MapObject& object,
+                                        const std::map<KeyframeId, ObjectVisibility>& visibility,
+                                        const std::map<KeyframeId, int>& view_of_keyframe,
+                                        const InventoryConfig& config);
+
+}  // namespace objmap
