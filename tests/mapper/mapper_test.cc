@@ -169,8 +169,8 @@ TEST_F(MapperScene, RepeatedFramesOfOneViewCountOnceForAndAgainstAnObject) {
 
   // Without independent views the fifteen frames would be fifteen votes.
   MapperConfig per_keyframe;
-  per_keyframe.inventory.view_translation_m = 0.f;
-  per_keyframe.inventory.view_rotation_deg = 0.f;
+  per_keyframe.views.translation_m = 0.f;
+  per_keyframe.views.rotation_deg = 0.f;
   Mapper counted{per_keyframe};
   for (int keyframe = 0; keyframe < 15; ++keyframe) {
     const RgbdFrame frame = NearFrame(keyframe);

@@ -56,6 +56,7 @@ void VisitMapModel(MapperConfig* m, Visitor& v) {
   v("min_class_share", &a.min_class_share);
   v.Section("objects");
   v("model_voxel_size_m", &m->objects.model_voxel_size_m);
+  v("min_voxel_observations", &m->objects.min_voxel_observations);
   OccupancyConfig& o = m->occupancy;
   v.Section("occupancy");
   v("resolution_m", &o.resolution_m);
@@ -78,9 +79,10 @@ void VisitMapModel(MapperConfig* m, Visitor& v) {
   v("detectable_area_px", &i.detectable_area_px);
   v("occlusion_margin_m", &i.occlusion_margin_m);
   v("occlusion_margin_per_m2", &i.occlusion_margin_per_m2);
-  v("view_translation_m", &i.view_translation_m);
-  v("view_rotation_deg", &i.view_rotation_deg);
   v("max_visibility_points", &i.max_visibility_points);
+  v.Section("views");
+  v("translation_m", &m->views.translation_m);
+  v("rotation_deg", &m->views.rotation_deg);
   ReassociationConfig& r = m->reassociation;
   v.Section("reassociation");
   v("enabled", &r.enabled);

@@ -6,7 +6,7 @@
 namespace objmap {
 
 std::shared_ptr<const ObjectView> SnapshotBuilder::MakeView(
-    const MapObject& object, bool confirmed, std::uint64_t version,
+    const ObjectMap& objects, const MapObject& object, bool confirmed, std::uint64_t version,
     const std::shared_ptr<const ObjectView>& previous) {
   auto view = std::make_shared<ObjectView>();
   view->id = object.id;
@@ -28,7 +28,7 @@ std::shared_ptr<const ObjectView> SnapshotBuilder::MakeView(
   // not change (only its inventory status did).
   const bool same_model = previous && model_versions_[object.id] == object.version;
   view->model_W = same_model ? previous->model_W
-                             : std::make_shared<const ColoredPoints>(object.model_W.Points());
+                             : std::make_shared<const ColoredPoints>(objects.ModelPoints(object));
   return view;
 }
 
@@ -59,7 +59,7 @@ std::shared_ptr<const MapSnapshot> SnapshotBuilder::Build(const Mapper& mapper,
       snapshot->objects.emplace(id, previous);
       continue;
     }
-    auto view = MakeView(object, is_confirmed, version, previous);
+    auto view = MakeView(mapper.objects(), object, is_confirmed, version, previous);
     (previous ? local.updated : local.added).push_back(id);
     if (previous) Touch(previous->class_id, version);
     Touch(view->class_id, version);

@@ -24,7 +24,8 @@ class SnapshotBuilder {
                                            Diff* diff);
 
  private:
-  std::shared_ptr<const ObjectView> MakeView(const MapObject& object, bool confirmed,
+  std::shared_ptr<const ObjectView> MakeView(const ObjectMap& objects, const MapObject& object,
+                                             bool confirmed,
                                              std::uint64_t version,
                                              const std::shared_ptr<const ObjectView>& previous);
   void Touch(int class_id, std::uint64_t version);

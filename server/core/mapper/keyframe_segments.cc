@@ -18,8 +18,10 @@ bool Inside(const BoundingBox2D& box, int u, int v) {
 }
 
 // A table top is a supporting plane, so SelectDetectionPixels never returns it. Surface classes
-// take the plane segment with most pixels in the box, provided most of that plane lies in the box
-// (the floor or a wall seen between the table legs extends far beyond it).
+// take a plane segment most of which lies in the box (the floor or a wall seen beyond the table
+// extends far outside it): of those with a good share of the box (a quarter of the best one's
+// pixels), the nearest. The top hides what lies below it, so a patch of floor seen between
+// the legs and cut off by them (also mostly inside the box) is always farther than the top.
 std::vector<int> SurfacePlanePixels(const SegmentationResult& segmentation,
                                     const SegmentIndex& index, const BoundingBox2D& box) {
   std::vector<int> inside(segmentation.num_segments, 0);
@@ -33,11 +35,20 @@ std::vector<int> SurfacePlanePixels(const SegmentationResult& segmentation,
       if (label >= 0 && segmentation.segment_is_plane[label]) ++inside[label];
     }
   }
-  int best = -1;
+  std::vector<int> candidates;
+  int most_inside = 0;
   for (int s = 0; s < segmentation.num_segments; ++s) {
     const int total = segmentation.segment_is_plane[s] ? index.segments[s].pixels : 0;
-    if (inside[s] * 2 < total) continue;
-    if (best < 0 || inside[s] > inside[best]) best = s;
+    if (total == 0 || inside[s] * 2 < total) continue;
+    candidates.push_back(s);
+    most_inside = std::max(most_inside, inside[s]);
+  }
+  int best = -1;
+  double best_depth = 0.0;
+  for (int s : candidates) {
+    if (inside[s] * 4 < most_inside) continue;
+    const double mean_depth = index.segments[s].sum_z / std::max(1, index.segments[s].pixels);
+    if (best < 0 || mean_depth < best_depth) best = s, best_depth = mean_depth;
   }
   if (best < 0) return {};
   return std::vector<int>(index.pixel_ids.begin() + index.offsets[best],

@@ -93,7 +93,7 @@ bool WriteMapOutputs(const Mapper& mapper, const std::string& out_dir, std::stri
     return false;
   }
   for (const MapObject* object : mapper.ConfirmedObjects()) {
-    const ColoredPoints model = object->model_W.Points();
+    const ColoredPoints model = mapper.objects().ModelPoints(*object);
     const std::string path = out_dir + "/objects/" + std::to_string(object->id) + "_" +
                              CocoClassFileName(object->Label()) + ".ply";
     if (!WritePly(path, model.points, model.colors, why)) return false;

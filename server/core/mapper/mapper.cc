@@ -180,7 +180,7 @@ bool RegenerationConfig::IsValid(std::string* why) const {
 bool MapperConfig::IsValid(std::string* why) const {
   if (!segmenter.IsValid(why) || !detection_segment.IsValid(why) || !association.IsValid(why) ||
       !objects.IsValid(why) || !occupancy.IsValid(why) || !inventory.IsValid(why) ||
-      !reassociation.IsValid(why) || !regeneration.IsValid(why)) {
+      !reassociation.IsValid(why) || !regeneration.IsValid(why) || !views.IsValid(why)) {
     return false;
   }
   if (!(min_detection_score >= 0.f && min_detection_score <= 1.f)) {
@@ -234,7 +234,13 @@ struct Mapper::Impl {
   mutable std::map<ObjectId, ObjectVisibilityCache> visibility_cache;
 
   const std::map<KeyframeId, ObjectVisibility>& VisibilityOf(const MapObject& object) const;
-  std::map<KeyframeId, int> ViewsOfKeyframes() const;
+
+  // The independent view of every keyframe (ViewGroupingConfig), extended keyframe by keyframe
+  // and recomputed when poses change; the first keyframe of the latest view is its anchor.
+  std::map<KeyframeId, int> view_of_keyframe;
+  KeyframeId view_anchor = 0;
+  int ViewOfNewKeyframe(KeyframeId id, const Eigen::Isometry3d& T_W_C);
+  void RecomputeViews();
 
   void Reassociate();
   KeyframePoseLookup PoseLookup() const;
@@ -267,10 +273,31 @@ const std::map<KeyframeId, ObjectVisibility>& Mapper::Impl::VisibilityOf(
   return cache.seen;
 }
 
-std::map<KeyframeId, int> Mapper::Impl::ViewsOfKeyframes() const {
+int Mapper::Impl::ViewOfNewKeyframe(KeyframeId id, const Eigen::Isometry3d& T_W_C) {
+  const auto anchor = keyframes.find(view_anchor);
+  int view = 0;
+  if (anchor != keyframes.end()) {
+    view = view_of_keyframe.at(view_anchor);
+    if (!config.views.SameView(anchor->second.T_W_C, T_W_C)) {
+      ++view;
+      view_anchor = id;
+    }
+  } else {
+    view_anchor = id;
+  }
+  view_of_keyframe[id] = view;
+  return view;
+}
+
+void Mapper::Impl::RecomputeViews() {
   std::map<KeyframeId, Eigen::Isometry3d> poses;
   for (const auto& [id, record] : keyframes) poses.emplace(id, record.T_W_C);
-  return IndependentViews(poses, config.inventory);
+  view_of_keyframe = IndependentViews(poses, config.views);
+  view_anchor = 0;
+  for (const auto& [id, view] : view_of_keyframe) {
+    if (view_anchor == 0 || view != view_of_keyframe.at(view_anchor)) view_anchor = id;
+  }
+  objects.AssignViews(view_of_keyframe);
 }
 
 KeyframePoseLookup Mapper::Impl::PoseLookup() const {
@@ -469,8 +496,12 @@ bool Mapper::AddKeyframe(const RgbdFrame& frame, const std::vector<Detection>& d
   result->timings.segmentation_ms = MillisecondsSince(start);
 
   start = Clock::now();
+  const int view = impl_->ViewOfNewKeyframe(result->keyframe_id, frame.T_W_C);
   std::vector<ObjectObservation> observations;
-  for (SegmentedDetection& entry : segmented) observations.push_back(std::move(entry.observation));
+  for (SegmentedDetection& entry : segmented) {
+    entry.observation.view = view;
+    observations.push_back(std::move(entry.observation));
+  }
   AssociateKeyframe(&impl_->objects, &impl_->associator, &observations, frame.T_W_C, result);
   MergeDuplicates(&impl_->objects, &impl_->associator, result);
   result->timings.association_ms = MillisecondsSince(start);
@@ -518,7 +549,10 @@ bool Mapper::UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses, s
     moved.insert(id);
   }
   report->keyframes_moved = static_cast<int>(moved.size());
-  if (!moved.empty()) impl_->visibility_cache.clear();  // seen from other places now
+  if (!moved.empty()) {
+    impl_->visibility_cache.clear();  // seen from other places now
+    impl_->RecomputeViews();
+  }
   if (moved.empty()) {
     report->objects_after = report->objects_before;
     return true;
@@ -547,6 +581,14 @@ RestoreOutcome Mapper::Restore(std::map<KeyframeId, KeyframeRecord> keyframes,
   impl_->visibility_cache.clear();
   impl_->next_keyframe_id =
       impl_->keyframes.empty() ? 1 : impl_->keyframes.rbegin()->first + 1;
+  // Views come from the poses: the observations' stored views (if any) are replaced.
+  impl_->RecomputeViews();
+  for (auto& [id, list] : observations) {
+    for (ObjectObservation& observation : list) {
+      const auto it = impl_->view_of_keyframe.find(observation.keyframe_id);
+      observation.view = it == impl_->view_of_keyframe.end() ? -1 : it->second;
+    }
+  }
   impl_->objects.Restore(std::move(observations), next_object_id, impl_->PoseLookup());
   impl_->associator = Associator(impl_->config.association);  // caches of the old objects
   RestoreOutcome outcome;
@@ -579,13 +621,13 @@ void Mapper::ReadOccupancy(const std::function<void(const OccupancyMap&)>& read)
 }
 
 ObjectEvidence Mapper::Evidence(const MapObject& object) const {
-  return EvidenceOf(object, impl_->VisibilityOf(object), impl_->ViewsOfKeyframes(),
+  return EvidenceOf(object, impl_->VisibilityOf(object), impl_->view_of_keyframe,
                     impl_->config.inventory);
 }
 
 std::vector<const MapObject*> Mapper::ConfirmedObjects() const {
   const InventoryConfig& thresholds = impl_->config.inventory;
-  const std::map<KeyframeId, int> views = impl_->ViewsOfKeyframes();
+  const std::map<KeyframeId, int>& views = impl_->view_of_keyframe;
   // Objects merged away or re-associated since: their cached visibility is of no use.
   for (auto it = impl_->visibility_cache.begin(); it != impl_->visibility_cache.end();) {
     it = impl_->objects.Find(it->first) == nullptr ? impl_->visibility_cache.erase(it)

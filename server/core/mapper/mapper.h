@@ -56,6 +56,7 @@ struct MapperConfig {
   ObjectMapConfig objects;
   OccupancyConfig occupancy;
   InventoryConfig inventory;
+  ViewGroupingConfig views;
   ReassociationConfig reassociation;
   RegenerationConfig regeneration;
   /// Detections scoring lower are ignored.

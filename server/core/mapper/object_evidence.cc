@@ -22,15 +22,26 @@ bool InventoryConfig::IsValid(std::string* why) const {
     *why = "InventoryConfig: occlusion_margin_m and occlusion_margin_per_m2 must be >= 0";
     return false;
   }
-  if (!(view_translation_m >= 0.f) || !(view_rotation_deg >= 0.f)) {
-    *why = "InventoryConfig: view_translation_m and view_rotation_deg must be >= 0";
-    return false;
-  }
   if (max_visibility_points < 1) {
     *why = "InventoryConfig: max_visibility_points must be >= 1";
     return false;
   }
   return true;
+}
+
+bool ViewGroupingConfig::IsValid(std::string* why) const {
+  if (!(translation_m >= 0.f) || !(rotation_deg >= 0.f)) {
+    *why = "ViewGroupingConfig: translation_m and rotation_deg must be >= 0";
+    return false;
+  }
+  return true;
+}
+
+bool ViewGroupingConfig::SameView(const Eigen::Isometry3d& anchor_W_C,
+                                  const Eigen::Isometry3d& T_W_C) const {
+  const Eigen::Isometry3d delta = anchor_W_C.inverse() * T_W_C;
+  return delta.translation().norm() <= translation_m &&
+         Eigen::AngleAxisd(delta.linear()).angle() <= rotation_deg * M_PI / 180.0;
 }
 
 std::vector<Eigen::Vector3f> VisibilitySamples(const MapObject& object, int max_points) {
@@ -98,19 +109,12 @@ ObjectVisibility VisibilityIn(const std::vector<Eigen::Vector3f>& samples_W,
 }
 
 std::map<KeyframeId, int> IndependentViews(const std::map<KeyframeId, Eigen::Isometry3d>& poses,
-                                           const InventoryConfig& config) {
+                                           const ViewGroupingConfig& config) {
   std::map<KeyframeId, int> view_of;
-  const double max_rotation_rad = config.view_rotation_deg * M_PI / 180.0;
   const Eigen::Isometry3d* anchor = nullptr;
   int view = -1;
   for (const auto& [id, T_W_C] : poses) {
-    bool same_view = false;
-    if (anchor != nullptr) {
-      const Eigen::Isometry3d delta = anchor->inverse() * T_W_C;
-      same_view = delta.translation().norm() <= config.view_translation_m &&
-                  Eigen::AngleAxisd(delta.linear()).angle() <= max_rotation_rad;
-    }
-    if (!same_view) {
+    if (anchor == nullptr || !config.SameView(*anchor, T_W_C)) {
       anchor = &T_W_C;
       ++view;
     }

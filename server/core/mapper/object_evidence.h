@@ -15,8 +15,22 @@
 
 namespace objmap {
 
-/// Which objects count in the inventory. Each group of keyframes that look at the scene from
-/// about the same place (one independent view, see the view_* keys) adds, for an object it could
+/// Which keyframes are one independent view: frames a few centimetres apart see the same thing,
+/// so taking every frame instead of every tenth must count neither a detection, a miss nor a
+/// model voxel ten times. A keyframe whose camera lies within translation_m and rotation_deg of
+/// the first keyframe of the current view joins it; otherwise it starts the next view. The
+/// defaults are those of the motion keyframe policy (keyframes section).
+struct ViewGroupingConfig {
+  float translation_m = 0.10f;
+  float rotation_deg = 10.f;
+
+  [[nodiscard]] bool IsValid(std::string* why) const;
+  /// True when `T_W_C` lies within the bounds of `anchor_W_C`.
+  [[nodiscard]] bool SameView(const Eigen::Isometry3d& anchor_W_C,
+                              const Eigen::Isometry3d& T_W_C) const;
+};
+
+/// Which objects count in the inventory. Each independent view (ViewGroupingConfig) adds, for an object it could
 /// see, the mean over its keyframes of: the detection score where the object was detected, and
 /// -miss_weight x visible fraction x detectability where it was visible and not detected.
 /// Keyframes that could not see the object (outside the image, occluded, no depth) add nothing.
@@ -43,12 +57,6 @@ struct InventoryConfig {
   /// occlusion_margin_per_m2 x depth squared, the sensor's noise) in front of it, metres.
   float occlusion_margin_m = 0.05f;
   float occlusion_margin_per_m2 = 0.01f;
-  /// Keyframes whose camera lies within this distance and rotation of the first keyframe of a
-  /// group are one view: frames a few centimetres apart see the same thing, so taking every frame
-  /// instead of every tenth must not count a detection (or a miss) ten times. The defaults are
-  /// the motion keyframe policy's (keyframes section).
-  float view_translation_m = 0.10f;
-  float view_rotation_deg = 10.f;
   /// The visibility of an object is measured on at most this many evenly spaced model points.
   int max_visibility_points = 256;
 
@@ -77,11 +85,10 @@ struct ObjectVisibility {
                                             const std::vector<std::uint16_t>& depth_mm,
                                             const InventoryConfig& config);
 
-/// Groups keyframes (ascending ids, with their poses) into independent views: a keyframe starts a
-/// new group when it lies farther than view_translation_m or view_rotation_deg from the first
-/// keyframe of the current group. Returns the group index of each keyframe.
+/// Groups keyframes (ascending ids, with their poses) into independent views (ViewGroupingConfig).
+/// Returns the view index of each keyframe, from 0 up.
 [[nodiscard]] std::map<KeyframeId, int> IndependentViews(
-    const std::map<KeyframeId, Eigen::Isometry3d>& poses, const InventoryConfig& config);
+    const std::map<KeyframeId, Eigen::Isometry3d>& poses, const ViewGroupingConfig& config);
 
 /// An object's evidence and what it was made of.
 struct ObjectEvidence {

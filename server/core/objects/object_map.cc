@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <set>
 
 namespace objmap {
 namespace {
@@ -21,6 +22,10 @@ ColoredPoints Transform(const ColoredPoints& points_C, const Eigen::Isometry3d& 
 bool ObjectMapConfig::IsValid(std::string* why) const {
   if (!(model_voxel_size_m > 0.f)) {
     *why = "ObjectMapConfig.model_voxel_size_m must be positive";
+    return false;
+  }
+  if (min_voxel_observations < 1) {
+    *why = "ObjectMapConfig.min_voxel_observations must be >= 1";
     return false;
   }
   return true;
@@ -72,7 +77,7 @@ void ObjectMap::AddToModel(MapObject* object, const ObjectObservation& observati
   for (const auto& [class_id, score] : observation.class_scores) {
     if (class_id >= 0 && class_id < kNumCocoClasses) object->accumulated_scores[class_id] += score;
   }
-  object->model_W.Insert(Transform(observation.segment_C, T_W_C));
+  InsertIntoModel(object, observation, T_W_C);
   UpdateBounds(object);
 }
 
@@ -121,7 +126,7 @@ void ObjectMap::RebuildObject(MapObject* object, const KeyframePoseLookup& pose_
   object->model_W.Clear();
   for (const ObjectObservation& observation : object->observations) {
     const std::optional<Eigen::Isometry3d> T_W_C = pose_of(observation.keyframe_id);
-    if (T_W_C) object->model_W.Insert(Transform(observation.segment_C, *T_W_C));
+    if (T_W_C) InsertIntoModel(object, observation, *T_W_C);
   }
   UpdateBounds(object);
 }
@@ -163,6 +168,42 @@ void ObjectMap::Restore(std::map<ObjectId, std::vector<ObjectObservation>> obser
     RebuildObject(&object, pose_of);
     next_id_ = std::max(next_id_, id + 1);
   }
+}
+
+void ObjectMap::InsertIntoModel(MapObject* object, const ObjectObservation& observation,
+                                const Eigen::Isometry3d& T_W_C) {
+  if (observation.view >= 0) {
+    object->model_W.Insert(Transform(observation.segment_C, T_W_C), observation.view);
+  } else {
+    object->model_W.Insert(Transform(observation.segment_C, T_W_C));
+  }
+}
+
+void ObjectMap::AssignViews(const std::map<KeyframeId, int>& view_of) {
+  for (auto& [id, object] : objects_) {
+    for (ObjectObservation& observation : object.observations) {
+      const auto it = view_of.find(observation.keyframe_id);
+      observation.view = it == view_of.end() ? -1 : it->second;
+    }
+  }
+}
+
+int MapObject::Views() const {
+  std::set<std::int64_t> views;
+  int own = 0;
+  for (const ObjectObservation& observation : observations) {
+    if (observation.view < 0) {
+      ++own;
+    } else {
+      views.insert(observation.view);
+    }
+  }
+  return own + static_cast<int>(views.size());
+}
+
+ColoredPoints ObjectMap::ModelPoints(const MapObject& object) const {
+  const int required = std::max(1, std::min(config_.min_voxel_observations, object.Views()));
+  return object.model_W.Points(static_cast<std::uint32_t>(required));
 }
 
 const MapObject* ObjectMap::Find(ObjectId id) const {

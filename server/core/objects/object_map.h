@@ -26,11 +26,19 @@ struct ObjectObservation {
   /// classes in the same keyframe picked the same segment.
   std::vector<std::pair<int, float>> class_scores;
   ColoredPoints segment_C;  ///< the detection's 3D segment, camera frame, downsampled
+  /// The independent view of its keyframe (ViewGroupingConfig), >= 0, or -1: a view of its own.
+  /// Derived from the keyframe poses (the mapper sets it), not stored.
+  std::int64_t view = -1;
 };
 
 struct ObjectMapConfig {
   /// Voxel size of the object models, metres (paper: 5 mm).
   float model_voxel_size_m = 0.005f;
+  /// The published model (ModelPoints: queries, exports) keeps the voxels that at least this many
+  /// independent views of the object (ObjectObservation::view) reached, or all of them when it
+  /// has fewer views: a voxel one view put there and no other confirmed is mostly depth noise or
+  /// a border pixel. The association keeps matching against every voxel. 1 keeps all.
+  int min_voxel_observations = 2;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
@@ -56,6 +64,8 @@ struct MapObject {
   [[nodiscard]] float Confidence() const;
   /// Keyframes that saw this object, ascending, without repeats.
   [[nodiscard]] std::vector<KeyframeId> Keyframes() const;
+  /// Independent views that saw it (observations without a view count one each).
+  [[nodiscard]] int Views() const;
 };
 
 /// Returns the world pose of a keyframe; used to rebuild models after pose updates.
@@ -78,6 +88,10 @@ class ObjectMap {
   /// Removes an object (false when unknown).
   bool Remove(ObjectId id);
 
+  /// Sets the view of every observation (keyframes missing from `view_of`: -1) without rebuilding
+  /// the models; Rebuild after it counts model voxels by these views.
+  void AssignViews(const std::map<KeyframeId, int>& view_of);
+
   /// Rebuilds every model from its stored segments with the poses `pose_of` returns now.
   /// Observations whose keyframe has no pose are kept but not drawn.
   void Rebuild(const KeyframePoseLookup& pose_of);
@@ -93,6 +107,8 @@ class ObjectMap {
   [[nodiscard]] ObjectId next_id() const { return next_id_; }
 
   [[nodiscard]] const MapObject* Find(ObjectId id) const;
+  /// The object's published model (min_voxel_observations).
+  [[nodiscard]] ColoredPoints ModelPoints(const MapObject& object) const;
   [[nodiscard]] const std::map<ObjectId, MapObject>& objects() const { return objects_; }
   [[nodiscard]] std::size_t size() const { return objects_.size(); }
   [[nodiscard]] const ObjectMapConfig& config() const { return config_; }
@@ -101,6 +117,8 @@ class ObjectMap {
   void AddToModel(MapObject* object, const ObjectObservation& observation,
                   const Eigen::Isometry3d& T_W_C);
   void UpdateBounds(MapObject* object);
+  void InsertIntoModel(MapObject* object, const ObjectObservation& observation,
+                       const Eigen::Isometry3d& T_W_C);
   void RebuildObject(MapObject* object, const KeyframePoseLookup& pose_of);
 
   ObjectMapConfig config_;

@@ -66,12 +66,18 @@ std::uint64_t VoxelModel::KeyOf(const Eigen::Vector3f& p) const {
   return VoxelKey(p, voxel_size_m_);
 }
 
-void VoxelModel::Insert(const ColoredPoints& points) {
+void VoxelModel::Insert(const ColoredPoints& points) { Insert(points, --own_views_); }
+
+void VoxelModel::Insert(const ColoredPoints& points, std::int64_t view) {
   const bool has_color = points.colors.size() == points.points.size();
   for (std::size_t i = 0; i < points.points.size(); ++i) {
     const Eigen::Vector3f& p = points.points[i];
     if (!p.allFinite()) continue;
     Accumulator& voxel = voxels_[KeyOf(p)];
+    if (voxel.last_view != view) {
+      voxel.last_view = view;
+      ++voxel.observations;
+    }
     voxel.sum_xyz += p.cast<double>();
     if (has_color) {
       voxel.sum_rgb +=
@@ -87,14 +93,26 @@ void VoxelModel::Insert(const VoxelModel& other) {
     voxel.sum_xyz += source.sum_xyz;
     voxel.sum_rgb += source.sum_rgb;
     voxel.count += source.count;
+    voxel.observations += source.observations;
+    voxel.last_view = std::max(voxel.last_view, source.last_view);
   }
+  own_views_ = std::min(own_views_, other.own_views_);
 }
 
-ColoredPoints VoxelModel::Points() const {
+ColoredPoints VoxelModel::Points() const { return Points(0); }
+
+std::size_t VoxelModel::CountSeen(std::uint32_t min_observations) const {
+  return static_cast<std::size_t>(
+      std::count_if(voxels_.begin(), voxels_.end(),
+                    [&](const auto& entry) { return entry.second.observations >= min_observations; }));
+}
+
+ColoredPoints VoxelModel::Points(std::uint32_t min_observations) const {
   ColoredPoints out;
   out.points.reserve(voxels_.size());
   out.colors.reserve(voxels_.size());
   for (const auto& [key, voxel] : voxels_) {
+    if (voxel.observations < min_observations) continue;
     out.points.push_back(MeanOf(voxel));
     const Eigen::Vector3d rgb = voxel.sum_rgb * (1.0 / voxel.count);
     out.colors.push_back({static_cast<std::uint8_t>(RoundNonNegative(rgb.x())),

@@ -3,6 +3,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <unordered_map>
 #include <vector>
 
@@ -25,9 +26,16 @@ class VoxelModel {
  public:
   explicit VoxelModel(float voxel_size_m = 0.005f) : voxel_size_m_(voxel_size_m) {}
 
+  /// Inserts one observation's points. Observations of one `view` (an id; every observation of a
+  /// view inserted before the next view's) reach a voxel once between them: they see the same
+  /// surface from about the same place. Without a view, the insertion is a view of its own.
+  void Insert(const ColoredPoints& points, std::int64_t view);
   void Insert(const ColoredPoints& points);
   void Insert(const VoxelModel& other);
-  void Clear() { voxels_.clear(); }
+  void Clear() {
+    voxels_.clear();
+    own_views_ = 0;
+  }
 
   [[nodiscard]] std::size_t size() const { return voxels_.size(); }
   [[nodiscard]] bool empty() const { return voxels_.empty(); }
@@ -36,6 +44,12 @@ class VoxelModel {
   /// One point per voxel (mean of what fell in it). The order is the container's: the same for
   /// the same sequence of insertions.
   [[nodiscard]] ColoredPoints Points() const;
+  /// The same, only of the voxels that at least `min_observations` views reached: a voxel one
+  /// view put there and no other confirmed is depth noise or a stray border pixel more often
+  /// than surface.
+  [[nodiscard]] ColoredPoints Points(std::uint32_t min_observations) const;
+  /// Voxels that at least `min_observations` views reached.
+  [[nodiscard]] std::size_t CountSeen(std::uint32_t min_observations) const;
 
   /// Calls `visit(point)` with each point of Points(), in the same order and with the same
   /// values, without copying the model; stops early when `visit` returns false.
@@ -51,6 +65,8 @@ class VoxelModel {
     Eigen::Vector3d sum_xyz = Eigen::Vector3d::Zero();
     Eigen::Vector3d sum_rgb = Eigen::Vector3d::Zero();
     std::uint32_t count = 0;
+    std::uint32_t observations = 0;  ///< views that reached it
+    std::int64_t last_view = std::numeric_limits<std::int64_t>::min();
   };
   [[nodiscard]] std::uint64_t KeyOf(const Eigen::Vector3f& p) const;
   [[nodiscard]] static Eigen::Vector3f MeanOf(const Accumulator& voxel) {
@@ -58,6 +74,7 @@ class VoxelModel {
   }
 
   float voxel_size_m_;
+  std::int64_t own_views_ = 0;  ///< views of insertions without one: -1, -2, ...
   std::unordered_map<std::uint64_t, Accumulator> voxels_;
 };
 
