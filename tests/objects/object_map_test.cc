@@ -87,5 +87,32 @@ TEST(ObjectMap, MergeMovesObservationsAndScores) {
   EXPECT_GT(map.AddObject(Observation(3, kCup, 0.4f, points), {}), b);
 }
 
+TEST(ObjectMap, ThePublishedModelKeepsVoxelsTwoViewsReached) {
+  ObjectMap map;
+  const std::vector<Eigen::Vector3f> surface = {{0.0f, 0.0f, 1.0f}, {0.02f, 0.0f, 1.0f}};
+  ObjectObservation first = Observation(1, kCup, 0.6f, surface);
+  first.segment_C.points.emplace_back(0.3f, 0.3f, 1.0f);  // a stray border pixel, seen once
+  first.view = 0;
+  const ObjectId id = map.AddObject(first, kIdentity);
+  // Seen once: the model is all there is.
+  EXPECT_EQ(map.ModelPoints(*map.Find(id)).size(), 3u);
+  ObjectObservation same_view = Observation(2, kCup, 0.6f, surface);
+  same_view.segment_C.points.emplace_back(0.3f, 0.3f, 1.0f);
+  same_view.view = 0;  // a frame a few millimetres on: still one view
+  ASSERT_TRUE(map.AddObservation(id, same_view, kIdentity));
+  EXPECT_EQ(map.Find(id)->Views(), 1);
+  EXPECT_EQ(map.ModelPoints(*map.Find(id)).size(), 3u);
+  ObjectObservation next_view = Observation(3, kCup, 0.6f, surface);
+  next_view.view = 1;
+  ASSERT_TRUE(map.AddObservation(id, next_view, kIdentity));
+  EXPECT_EQ(map.Find(id)->Views(), 2);
+  EXPECT_EQ(map.ModelPoints(*map.Find(id)).size(), 2u) << "the stray voxel, one view, is out";
+  EXPECT_EQ(map.Find(id)->model_W.size(), 3u) << "the association still sees every voxel";
+  // Reassigned views (poses changed): all three keyframes one view, the stray voxel counts.
+  map.AssignViews({{1, 0}, {2, 0}, {3, 0}});
+  map.Rebuild([](KeyframeId) { return std::optional<Eigen::Isometry3d>(kIdentity); });
+  EXPECT_EQ(map.ModelPoints(*map.Find(id)).size(), 3u);
+}
+
 }  // namespace
 }  // namespace objmap

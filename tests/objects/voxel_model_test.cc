@@ -120,3 +120,41 @@ TEST(VoxelModelTest, MeanColoursRoundLikeLround) {
 
 }  // namespace
 }  // namespace objmap
+
+namespace objmap {
+namespace {
+
+ColoredPoints Points(std::initializer_list<Eigen::Vector3f> list) {
+  ColoredPoints points;
+  points.points = list;
+  return points;
+}
+
+TEST(VoxelModelViews, AVoxelCountsEachViewOnceAndThePublishedPointsNeedTwo) {
+  VoxelModel model(0.01f);
+  const Eigen::Vector3f surface(0.105f, 0.205f, 1.005f), stray(0.5f, 0.5f, 1.5f);
+  // View 3 inserts the surface twice (two frames a few millimetres apart) and a stray point once;
+  // view 4 sees the surface again. Two views reached the surface voxel, one the stray one.
+  model.Insert(Points({surface}), 3);
+  model.Insert(Points({surface, stray}), 3);
+  model.Insert(Points({surface}), 4);
+  EXPECT_EQ(model.size(), 2u);
+  EXPECT_EQ(model.CountSeen(2), 1u);
+  const ColoredPoints published = model.Points(2);
+  ASSERT_EQ(published.size(), 1u);
+  EXPECT_TRUE(published.points[0].isApprox(surface));
+  EXPECT_EQ(model.Points().size(), 2u) << "every voxel without a minimum";
+  // Without views every insertion is a view of its own.
+  VoxelModel unviewed(0.01f);
+  unviewed.Insert(Points({surface}));
+  unviewed.Insert(Points({surface, stray}));
+  EXPECT_EQ(unviewed.CountSeen(2), 1u);
+  EXPECT_EQ(unviewed.CountSeen(3), 0u);
+  // A merged model adds the views of the other.
+  model.Insert(unviewed);
+  EXPECT_EQ(model.CountSeen(3), 1u);
+  EXPECT_EQ(model.CountSeen(2), 2u) << "the stray voxel: once in each model";
+}
+
+}  // namespace
+}  // namespace objmap
