@@ -240,6 +240,7 @@ struct Mapper::Impl {
   std::map<KeyframeId, int> view_of_keyframe;
   KeyframeId view_anchor = 0;
   int ViewOfNewKeyframe(KeyframeId id, const Eigen::Isometry3d& T_W_C);
+  // Regroups every keyframe with its current pose (the objects' observations are not touched).
   void RecomputeViews();
 
   void Reassociate();
@@ -294,10 +295,14 @@ void Mapper::Impl::RecomputeViews() {
   for (const auto& [id, record] : keyframes) poses.emplace(id, record.T_W_C);
   view_of_keyframe = IndependentViews(poses, config.views);
   view_anchor = 0;
+  if (view_of_keyframe.empty()) return;
+  const int last_view = view_of_keyframe.rbegin()->second;
   for (const auto& [id, view] : view_of_keyframe) {
-    if (view_anchor == 0 || view != view_of_keyframe.at(view_anchor)) view_anchor = id;
+    if (view == last_view) {
+      view_anchor = id;
+      break;
+    }
   }
-  objects.AssignViews(view_of_keyframe);
 }
 
 KeyframePoseLookup Mapper::Impl::PoseLookup() const {
@@ -549,14 +554,13 @@ bool Mapper::UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses, s
     moved.insert(id);
   }
   report->keyframes_moved = static_cast<int>(moved.size());
-  if (!moved.empty()) {
-    impl_->visibility_cache.clear();  // seen from other places now
-    impl_->RecomputeViews();
-  }
   if (moved.empty()) {
     report->objects_after = report->objects_before;
     return true;
   }
+  impl_->visibility_cache.clear();  // seen from other places now
+  impl_->RecomputeViews();
+  impl_->objects.AssignViews(impl_->view_of_keyframe);
   if (reassociate) {
     impl_->Reassociate();
     report->reassociated = true;
@@ -583,12 +587,7 @@ RestoreOutcome Mapper::Restore(std::map<KeyframeId, KeyframeRecord> keyframes,
       impl_->keyframes.empty() ? 1 : impl_->keyframes.rbegin()->first + 1;
   // Views come from the poses: the observations' stored views (if any) are replaced.
   impl_->RecomputeViews();
-  for (auto& [id, list] : observations) {
-    for (ObjectObservation& observation : list) {
-      const auto it = impl_->view_of_keyframe.find(observation.keyframe_id);
-      observation.view = it == impl_->view_of_keyframe.end() ? -1 : it->second;
-    }
-  }
+  for (auto& [id, list] : observations) AssignViews(impl_->view_of_keyframe, &list);
   impl_->objects.Restore(std::move(observations), next_object_id, impl_->PoseLookup());
   impl_->associator = Associator(impl_->config.association);  // caches of the old objects
   RestoreOutcome outcome;

@@ -179,13 +179,16 @@ void ObjectMap::InsertIntoModel(MapObject* object, const ObjectObservation& obse
   }
 }
 
-void ObjectMap::AssignViews(const std::map<KeyframeId, int>& view_of) {
-  for (auto& [id, object] : objects_) {
-    for (ObjectObservation& observation : object.observations) {
-      const auto it = view_of.find(observation.keyframe_id);
-      observation.view = it == view_of.end() ? -1 : it->second;
-    }
+void AssignViews(const std::map<KeyframeId, int>& view_of,
+                 std::vector<ObjectObservation>* observations) {
+  for (ObjectObservation& observation : *observations) {
+    const auto it = view_of.find(observation.keyframe_id);
+    observation.view = it == view_of.end() ? -1 : it->second;
   }
+}
+
+void ObjectMap::AssignViews(const std::map<KeyframeId, int>& view_of) {
+  for (auto& [id, object] : objects_) objmap::AssignViews(view_of, &object.observations);
 }
 
 int MapObject::Views() const {

@@ -68,6 +68,10 @@ struct MapObject {
   [[nodiscard]] int Views() const;
 };
 
+/// Sets each observation's view from its keyframe's in `view_of` (-1 where the keyframe has none).
+void AssignViews(const std::map<KeyframeId, int>& view_of,
+                 std::vector<ObjectObservation>* observations);
+
 /// Returns the world pose of a keyframe; used to rebuild models after pose updates.
 using KeyframePoseLookup = std::function<std::optional<Eigen::Isometry3d>(KeyframeId)>;
 
