@@ -139,6 +139,7 @@ nlohmann::ordered_json CountsJson(const ClassCounts& c) {
           {"duplicates", c.duplicates},
           {"merges", c.merges},
           {"wrong_labels", c.wrong_labels},
+          {"unseen", c.unseen},
           {"precision", c.Precision()},
           {"recall", c.Recall()}};
 }
@@ -234,6 +235,10 @@ int EvaluateWithGroundTruth(const std::vector<MappedObject>& mapped, const std::
     return kOk;
   }
   PrintTable(evaluation.per_class, evaluation.totals);
+  if (evaluation.totals.unseen > 0) {
+    std::cout << evaluation.totals.unseen
+              << " object(s) of the ground truth were never in view and are not counted\n";
+  }
   std::cout << "model accuracy (mean distance of model points to the real surface): "
             << (evaluation.mean_model_to_surface_m < 0.0
                     ? std::string("n/a (no models or no surface samples)")

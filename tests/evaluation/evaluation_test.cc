@@ -94,6 +94,45 @@ TEST(EvaluateObjects, CountsDuplicatesMergesMissesAndWrongLabels) {
   ASSERT_EQ(evaluation.matches.size(), 2u);
 }
 
+// An object the sequence never showed (a chair behind the camera's path) is not real: not a
+// miss, not a true positive, counted apart as unseen; one shown in a single frame is real.
+TEST(EvaluateObjects, ObjectsTheSequenceNeverShowedAreUnseenNotMissed) {
+  std::vector<GroundTruthObject> real = {
+      Real(1, "chair", {0, 0, 0.45}, {0.5, 0.5, 0.9}),
+      Real(2, "chair", {3, 0, 0.45}, {0.5, 0.5, 0.9}),
+      Real(3, "chair", {6, 0, 0.45}, {0.5, 0.5, 0.9}),
+  };
+  real[0].visible_frames = 0;   // never in view
+  real[1].visible_frames = 1;   // in view once
+  real[2].visible_frames = -1;  // not known: real, as before the field existed
+  const std::vector<MappedObject> mapped = {
+      Mapped(11, "chair", {2.75, -0.25, 0.0}, {3.25, 0.25, 0.9}),
+  };
+  const ObjectEvaluation evaluation = EvaluateObjects(real, mapped, EvaluationConfig{});
+  const ClassCounts& chairs = Counts(evaluation, "chair");
+  EXPECT_EQ(chairs.real, 2);
+  EXPECT_EQ(chairs.unseen, 1);
+  EXPECT_EQ(chairs.true_positives, 1);
+  EXPECT_EQ(chairs.misses, 1);  // the one whose visibility is not known
+  EXPECT_EQ(evaluation.totals.unseen, 1);
+  EXPECT_DOUBLE_EQ(evaluation.totals.Recall(), 0.5);
+
+  // A stricter evaluation asks for two frames: the chair seen once is unseen too, and the map's
+  // chair standing on it becomes a false positive.
+  EvaluationConfig two_frames;
+  two_frames.min_visible_frames = 2;
+  const ObjectEvaluation strict = EvaluateObjects(real, mapped, two_frames);
+  EXPECT_EQ(Counts(strict, "chair").unseen, 2);
+  EXPECT_EQ(Counts(strict, "chair").real, 1);
+  EXPECT_EQ(Counts(strict, "chair").false_positives, 1);
+
+  EvaluationConfig negative;
+  negative.min_visible_frames = -1;
+  std::string why;
+  EXPECT_FALSE(negative.IsValid(&why));
+  EXPECT_NE(why.find("min_visible_frames"), std::string::npos) << why;
+}
+
 // With models, a merge is a model lying substantially on two real objects: two mugs 2 cm apart,
 // one model half on each is a merge; a model of one mug with a tenth of its points on the rim
 // of the other is not, though its axis-aligned box holds most of both mugs' boxes.
@@ -306,6 +345,17 @@ TEST_F(EvaluationFiles, GroundTruthIsReadAndBadEntriesAreNamed) {
   EXPECT_EQ(objects[0].class_id, CocoClassId("cup"));
   EXPECT_DOUBLE_EQ(objects[0].T_W_B.translation().z(), 0.7);
   EXPECT_EQ(objects[0].surface_W.size(), 2u);
+  EXPECT_EQ(objects[0].visible_frames, -1);  // not in the file: not known
+
+  const std::string shown = Write("shown.json", R"({"objects": [{"id": 1, "class": "cup",
+        "pose": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1], "size": [1, 1, 1], "visible_frames": 0}]})");
+  ASSERT_TRUE(ReadGroundTruth(shown, &objects, &why)) << why;
+  EXPECT_EQ(objects[0].visible_frames, 0);
+  const std::string bad_frames = Write("bad_frames.json", R"({"objects": [{"id": 1,
+        "class": "cup", "pose": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1], "size": [1, 1, 1],
+        "visible_frames": -3}]})");
+  EXPECT_FALSE(ReadGroundTruth(bad_frames, &objects, &why));
+  EXPECT_NE(why.find("\"visible_frames\" must be an integer >= 0"), std::string::npos) << why;
 
   const std::string mug = Write("mug.json", R"({"objects": [{"id": 1, "class": "mug",
         "pose": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1], "size": [1, 1, 1]}]})");

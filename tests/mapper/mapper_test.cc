@@ -462,6 +462,71 @@ TEST_F(MapperScene, TouchingSameClassObjectsShareTheirSegmentAndStayTwo) {
   EXPECT_EQ(observations, 4u) << "the two oblique views each saw one thing where the mugs are";
 }
 
+// A box bounds what it shows: a segment spanning a small part of its box is a fragment (a handle,
+// the floor between a fridge's feet, whatever a spurious box landed on) and starts no object.
+TEST_F(MapperScene, ASegmentSpanningLittleOfItsBoxIsNotAnObservation) {
+  auto used_with = [&](float min_fill) {
+    MapperConfig config;
+    config.min_segment_box_fill = min_fill;
+    Mapper mapper(config);
+    // A box around the first cup reaching far above it and a cup's width to either side: the
+    // cup's segment is its only object segment, spanning a tenth of the box or less.
+    BoundingBox2D tall = Project(boxes_[1], Pose(0));
+    const float width = tall.Width();
+    tall.y_min = std::max(0.f, tall.y_min - 5.f * tall.Height());
+    tall.x_min -= width;
+    tall.x_max += width;
+    KeyframeResult result;
+    std::string why;
+    EXPECT_TRUE(mapper.AddKeyframe(Frame(0), {{tall, CocoClassId("bottle"), 0.6f}}, &result, &why))
+        << why;
+    return result.detections_used;
+  };
+  EXPECT_EQ(used_with(0.f), 1) << "without the test the cup's segment becomes a bottle";
+  EXPECT_EQ(used_with(MapperConfig{}.min_segment_box_fill), 0);
+  // The cups' own boxes are filled: both are used (MapAllViews checks it in every view).
+  Mapper mapper{MapperConfig{}};
+  MapAllViews(&mapper);
+  MapperConfig bad;
+  bad.min_segment_box_fill = 1.5f;
+  std::string why;
+  EXPECT_FALSE(bad.IsValid(&why));
+  EXPECT_NE(why.find("min_segment_box_fill"), std::string::npos) << why;
+}
+
+// A screen hung on a wall is within depth noise of it. When the segmentation does not take the
+// wall for a supporting plane (cupboards break it up in a real kitchen), no segment of its own
+// fills the screen's box, and the screen is the part of the wall its box covers.
+TEST_F(MapperScene, AFlatObjectOnASurfaceThatIsNoPlaneIsThePartItsBoxCovers) {
+  const int kTv = CocoClassId("tv");
+  const SceneBox screen{{1.5, -0.4, 0.65}, {1.5, 0.4, 0.95}, {0, 0, 0}};  // on the wall's face
+  auto map_screen = [&](const std::vector<int>& flat_classes) {
+    MapperConfig config;
+    config.segmenter.min_plane_area_m2 = 100.f;  // no supporting planes at all
+    config.flat_classes = flat_classes;
+    auto mapper = std::make_unique<Mapper>(config);
+    for (int view = 0; view < 3; ++view) {
+      KeyframeResult result;
+      std::string why;
+      EXPECT_TRUE(mapper->AddKeyframe(Frame(view), {{Project(screen, Pose(view)), kTv, 0.7f}},
+                                      &result, &why))
+          << why;
+    }
+    return mapper;
+  };
+  const auto with = map_screen(MapperConfig{}.flat_classes);
+  ASSERT_EQ(with->objects().size(), 1u);
+  const MapObject& tv = with->objects().objects().begin()->second;
+  EXPECT_EQ(tv.observations.size(), 3u);
+  EXPECT_NEAR(tv.centroid_W.x(), 1.5, 0.03);
+  EXPECT_NEAR(tv.centroid_W.z(), 0.8, 0.03);
+  // The box shrunk by flat_box_shrink_fraction per side: most of the screen, none of the rest.
+  EXPECT_GT(tv.max_W.y() - tv.min_W.y(), 0.5);
+  EXPECT_LT(tv.max_W.y() - tv.min_W.y(), 0.82);
+  const auto without = map_screen({});
+  EXPECT_EQ(without->objects().size(), 0u) << "the wall is no object's segment";
+}
+
 TEST_F(MapperScene, BadInputIsRejectedAndChangesNothing) {
   Mapper mapper{MapperConfig{}};
   std::string why;

@@ -234,7 +234,8 @@ class SeenSurface {
   Part structure_, objects_;
 };
 
-std::string GroundTruthJson(const Scene& scene, int surface_points, double seen_voxel_m) {
+std::string GroundTruthJson(const Scene& scene, int surface_points, double seen_voxel_m,
+                            const std::map<int, int>& visible_frames) {
   nlohmann::ordered_json objects = nlohmann::ordered_json::array();
   for (const SceneObject& object : scene.objects) {
     Eigen::Isometry3d T_W_B;
@@ -260,11 +261,13 @@ std::string GroundTruthJson(const Scene& scene, int surface_points, double seen_
     }
     nlohmann::ordered_json triangles = nlohmann::ordered_json::array();
     for (const Eigen::Vector3i& t : object.mesh.triangles) triangles.push_back({t[0], t[1], t[2]});
+    const auto visible = visible_frames.find(object.id);
     objects.push_back({{"id", object.id},
                        {"class", std::string(CocoClassName(object.class_id))},
                        {"name", object.name},
                        {"pose", pose},
                        {"size", {size.x(), size.y(), size.z()}},
+                       {"visible_frames", visible == visible_frames.end() ? 0 : visible->second},
                        {"surface_sample", samples},
                        {"surface_mesh", {{"vertices", vertices}, {"triangles", triangles}}}});
   }
@@ -307,6 +310,7 @@ bool WriteSequence(const Scene& scene, const SequenceOptions& options, const std
   }
   DetectionsByFrame detections;
   SeenSurface seen(options.seen_voxel_m);
+  std::map<int, int> visible_frames;  // object id -> frames showing >= min_visible_px of it
   for (std::size_t f = 0; f < scene.trajectory.size(); ++f) {
     const int index = static_cast<int>(f);
     const Eigen::Isometry3d& T_W_C = scene.trajectory[f];
@@ -332,6 +336,13 @@ bool WriteSequence(const Scene& scene, const SequenceOptions& options, const std
     detections[std::to_string(index)] =
         DetectFromInstances(scene, frame, T_W_C, options.detector, scene.seed, index);
     seen.Add(frame, T_W_C, K, options.seen_max_range_m);
+    std::map<int, int> pixels;
+    for (std::uint16_t id : frame.instance) {
+      if (id != 0) ++pixels[id];
+    }
+    for (const auto& [id, count] : pixels) {
+      if (count >= options.detector.min_visible_px) ++visible_frames[id];
+    }
   }
   if (!seen.Write((fs::path(dir) / "seen_structure.ply").string(),
                   (fs::path(dir) / "seen_objects.ply").string(), why)) {
@@ -359,7 +370,8 @@ bool WriteSequence(const Scene& scene, const SequenceOptions& options, const std
   }
   const std::string gt_path = (fs::path(dir) / "ground_truth.json").string();
   std::ofstream gt(gt_path);
-  gt << GroundTruthJson(scene, options.surface_points, options.seen_voxel_m) << "\n";
+  gt << GroundTruthJson(scene, options.surface_points, options.seen_voxel_m, visible_frames)
+     << "\n";
   if (!gt) {
     *why = gt_path + ": write failed";
     return false;

@@ -6,6 +6,7 @@
 // `objmap eval --gt`) and, with drift, corrected_poses.txt (`objmap map --corrected-poses`).
 
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -45,9 +46,12 @@ struct DetectorNoiseConfig {
                                                          std::uint64_t seed, int frame_index);
 
 /// ground_truth.json of the scene: per object id, class, name, box pose (4x4 row by row) and
-/// size (metres) from its mesh, `surface_points` samples of its surface and the surface mesh
-/// itself (vertices and triangles, world frame).
-[[nodiscard]] std::string GroundTruthJson(const Scene& scene, int surface_points);
+/// size (metres) from its mesh, the frames that showed it (`visible_frames`: at least the
+/// detector's min_visible_px pixels of it), `surface_points` samples of its surface and the
+/// surface mesh itself (vertices and triangles, world frame); the seen surface's files.
+[[nodiscard]] std::string GroundTruthJson(const Scene& scene, int surface_points,
+                                          double seen_voxel_m,
+                                          const std::map<int, int>& visible_frames);
 
 /// Odometry drift: the poses written with the frames are what a drifting tracker reports; the
 /// true ones go to corrected_poses.txt, as a loop closure would give them back.

@@ -405,6 +405,23 @@ TEST(SimSequence, AWrittenSequenceReadsBackWithItsGroundTruthAndDetections) {
   std::vector<GroundTruthObject> truth;
   ASSERT_TRUE(ReadGroundTruth((dir / "ground_truth.json").string(), &truth, &why)) << why;
   ASSERT_EQ(truth.size(), scene.objects.size());
+  // visible_frames: the frames showing at least the detector's min_visible_px pixels of it.
+  std::map<int, int> shown;
+  for (std::size_t f = 0; f < scene.trajectory.size(); ++f) {
+    const RenderedFrame at_f =
+        Render(scene, scene.trajectory[f], DepthNoiseConfig{}, scene.seed, static_cast<int>(f));
+    std::map<int, int> pixels;
+    for (std::uint16_t id : at_f.instance) ++pixels[id];
+    for (const auto& [id, count] : pixels) {
+      if (count >= DetectorNoiseConfig{}.min_visible_px) ++shown[id];
+    }
+  }
+  int shown_somewhere = 0;
+  for (std::size_t k = 0; k < truth.size(); ++k) {
+    EXPECT_EQ(truth[k].visible_frames, shown[scene.objects[k].id]) << k;
+    shown_somewhere += truth[k].visible_frames > 0;
+  }
+  EXPECT_GE(shown_somewhere, 3);
   for (std::size_t k = 0; k < truth.size(); ++k) {
     EXPECT_EQ(truth[k].class_id, scene.objects[k].class_id);
     EXPECT_EQ(truth[k].surface_W.size(), 2000u);

@@ -18,6 +18,7 @@ void VisitMapper(MapperConfig* m, Visitor& v) {
   v("flat_classes", &m->flat_classes);
   v("flat_box_shrink_fraction", &m->flat_box_shrink_fraction);
   v("split_max_box_iou", &m->split_max_box_iou);
+  v("min_segment_box_fill", &m->min_segment_box_fill);
   SegmenterConfig& s = m->segmenter;
   v.Section("segmenter");
   v("depth_jump_ratio", &s.depth_jump_ratio);

@@ -239,11 +239,11 @@ bool EvaluationConfig::IsValid(std::string* why) const {
   if (!(centroid_margin_m >= 0.0) || !(min_box_iou > 0.0 && min_box_iou <= 1.0) ||
       !(merge_box_share > 0.0 && merge_box_share <= 1.0) ||
       !(merge_point_share > 0.0 && merge_point_share <= 1.0) || !(merge_box_margin_m >= 0.0) ||
-      !(max_model_distance_m > 0.0)) {
+      !(max_model_distance_m > 0.0) || min_visible_frames < 0) {
     *why =
         "EvaluationConfig: centroid_margin_m >= 0, min_box_iou, merge_box_share and "
         "merge_point_share in (0, 1], merge_box_margin_m >= 0, "
-        "max_model_distance_m > 0 are required";
+        "max_model_distance_m > 0 and min_visible_frames >= 0 are required";
     return false;
   }
   return true;
@@ -267,12 +267,21 @@ void ClassCounts::Add(const ClassCounts& other) {
   duplicates += other.duplicates;
   merges += other.merges;
   wrong_labels += other.wrong_labels;
+  unseen += other.unseen;
 }
 
-ObjectEvaluation EvaluateObjects(const std::vector<GroundTruthObject>& real,
+ObjectEvaluation EvaluateObjects(const std::vector<GroundTruthObject>& ground_truth,
                                  const std::vector<MappedObject>& mapped,
                                  const EvaluationConfig& config) {
   ObjectEvaluation result;
+  std::vector<GroundTruthObject> real;
+  for (const GroundTruthObject& object : ground_truth) {
+    if (object.visible_frames >= 0 && object.visible_frames < config.min_visible_frames) {
+      ++result.per_class[object.class_id].unseen;
+    } else {
+      real.push_back(object);
+    }
+  }
   for (const GroundTruthObject& object : real) ++result.per_class[object.class_id].real;
   // Each mapped object stands for the nearest real object of its class it can stand for.
   std::map<std::size_t, std::vector<std::size_t>> standing_for;  // real index -> mapped indices

@@ -29,6 +29,10 @@ struct GroundTruthObject {
   /// on a chair).
   std::vector<Eigen::Vector3f> mesh_vertices_W;
   std::vector<Eigen::Vector3i> mesh_triangles;
+  /// Frames of the sequence that showed the object well enough to detect it (-1: not known).
+  /// An object the sequence never showed is not a real object of the map's scene: no map can
+  /// find it (a chair behind the camera's path all along).
+  int visible_frames = -1;
 };
 
 /// A mapped object as the evaluation sees it: what the map claims (its inventory objects).
@@ -59,6 +63,8 @@ struct EvaluationConfig {
   /// Model distances are capped here (a model point farther from every surface sample counts
   /// as this far), so one stray point cannot dominate the mean.
   double max_model_distance_m = 0.1;
+  /// Real objects with a known visible_frames below this are left out (counted as unseen).
+  int min_visible_frames = 1;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
@@ -73,6 +79,7 @@ struct ClassCounts {
   int duplicates = 0;       ///< mapped objects beyond the first that stand for one real object
   int merges = 0;           ///< mapped objects that cover two or more real objects
   int wrong_labels = 0;     ///< false positives that stand on a real object of another class
+  int unseen = 0;           ///< objects of the ground truth the sequence never showed (not real)
 
   [[nodiscard]] double Precision() const;  ///< TP / (TP + FP + duplicates); 1 when nothing mapped
   [[nodiscard]] double Recall() const;     ///< TP / real; 1 when nothing is real

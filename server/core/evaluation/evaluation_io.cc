@@ -1,8 +1,10 @@
 #include "evaluation/evaluation_io.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "pointcloud_io/pointcloud_io.h"
@@ -96,6 +98,15 @@ bool ReadGroundTruthObject(const Json& entry, const std::string& where, GroundTr
       (object->size_m.array() < 0.0).any()) {
     *why = where + ": \"size\" must be 3 finite numbers >= 0 (metres)";
     return false;
+  }
+  if (entry.contains("visible_frames")) {
+    const Json& frames = entry["visible_frames"];
+    if (!frames.is_number_integer() || frames.get<long long>() < 0) {
+      *why = where + ": \"visible_frames\" must be an integer >= 0";
+      return false;
+    }
+    object->visible_frames = static_cast<int>(std::min<long long>(frames.get<long long>(),
+                                                                  std::numeric_limits<int>::max()));
   }
   if (entry.contains("surface_sample")) {
     const Json& sample = entry["surface_sample"];

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include "segmentation/segment_index.h"
@@ -58,9 +59,11 @@ std::vector<int> SurfacePlanePixels(const SegmentationResult& segmentation,
 // Flat objects (a screen on a wall, a keyboard on a desk) lie within depth noise of their
 // supporting plane, so no segment separates them (the paper's lost keyboards). When one plane
 // segment covers most of the box, the object is the part of that plane the box covers, shrunk
-// by `shrink_fraction` on every side because colour and depth are not registered.
+// by `shrink_fraction` on every side because colour and depth are not registered. With
+// `planes_only` false the dominant segment may be any segment: a wall the segmentation did not
+// take for a supporting plane (cupboards around it) still carries the screen hung on it.
 std::vector<int> FlatObjectPixels(const SegmentationResult& segmentation, const BoundingBox2D& box,
-                                  float shrink_fraction) {
+                                  float shrink_fraction, bool planes_only) {
   const float du = shrink_fraction * box.Width();
   const float dv = shrink_fraction * box.Height();
   const int u0 = std::max(0, static_cast<int>(std::ceil(box.x_min + du)));
@@ -74,7 +77,7 @@ std::vector<int> FlatObjectPixels(const SegmentationResult& segmentation, const 
       const int label = segmentation.labels[v * segmentation.width + u];
       if (label < 0) continue;
       ++valid;
-      if (segmentation.segment_is_plane[label]) ++count[label];
+      if (!planes_only || segmentation.segment_is_plane[label]) ++count[label];
     }
   }
   std::vector<int> pixels;
@@ -107,6 +110,22 @@ std::vector<int> CropToBox(std::vector<int> pixels, const BoundingBox2D& box, in
 
 // The pixels of one detection: supporting surfaces take their plane, flat objects the part of
 // the plane in their box, everything else the segments SelectDetectionPixels picks.
+// Share of `box` that the bounding box of `pixels` covers.
+float BoxFill(const std::vector<int>& pixels, int width, const BoundingBox2D& box) {
+  if (pixels.empty() || !(box.Area() > 0.f)) return 0.f;
+  int u_min = width, v_min = std::numeric_limits<int>::max(), u_max = -1, v_max = -1;
+  for (int i : pixels) {
+    const int v = i / width, u = i - v * width;
+    u_min = std::min(u_min, u), u_max = std::max(u_max, u);
+    v_min = std::min(v_min, v), v_max = std::max(v_max, v);
+  }
+  // Pixel boxes are inclusive: a segment of one pixel spans 1 x 1.
+  const float w = std::min<float>(u_max + 1, box.x_max) - std::max<float>(u_min, box.x_min);
+  const float h = std::min<float>(v_max + 1, box.y_max) - std::max<float>(v_min, box.y_min);
+  if (w <= 0.f || h <= 0.f) return 0.f;
+  return std::min(1.f, w * h / box.Area());
+}
+
 std::vector<int> DetectionPixels(const SegmentationResult& segmentation, const SegmentIndex& index,
                                  const BoundingBox2D& box, int class_id,
                                  const MapperConfig& config) {
@@ -114,11 +133,22 @@ std::vector<int> DetectionPixels(const SegmentationResult& segmentation, const S
     std::vector<int> pixels = SurfacePlanePixels(segmentation, index, box);
     if (!pixels.empty()) return pixels;
   }
-  if (Contains(config.flat_classes, class_id)) {
-    std::vector<int> pixels = FlatObjectPixels(segmentation, box, config.flat_box_shrink_fraction);
+  const bool flat = Contains(config.flat_classes, class_id);
+  if (flat) {
+    std::vector<int> pixels =
+        FlatObjectPixels(segmentation, box, config.flat_box_shrink_fraction, true);
     if (!pixels.empty()) return pixels;
   }
-  return SelectDetectionPixels(segmentation, index, box, config.detection_segment);
+  std::vector<int> pixels =
+      SelectDetectionPixels(segmentation, index, box, config.detection_segment);
+  if (flat && BoxFill(pixels, segmentation.width, box) < config.min_segment_box_fill) {
+    // Only a fragment of the box stands out from its surroundings: the flat object is the part
+    // of the surface that fills its box.
+    std::vector<int> surface =
+        FlatObjectPixels(segmentation, box, config.flat_box_shrink_fraction, false);
+    if (!surface.empty()) return surface;
+  }
+  return pixels;
 }
 
 ColoredPoints SegmentPoints(const OrganizedCloud& cloud_C, const std::vector<int>& pixels,
@@ -237,7 +267,10 @@ std::vector<SegmentedDetection> SegmentDetections(
     const std::vector<int> pixels =
         CropToBox(DetectionPixels(segmentation, index, box, detection.class_id, config), box,
                   segmentation.width, config.detection_segment);
-    if (pixels.empty()) continue;
+    if (pixels.empty() ||
+        BoxFill(pixels, segmentation.width, box) < config.min_segment_box_fill) {
+      continue;
+    }
     bool handled = false;
     for (std::size_t k = 0; k < segmented.size() && !handled; ++k) {
       if (ClaimedFraction(pixels, claimed[k]) < 0.5f) continue;

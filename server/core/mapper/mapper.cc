@@ -199,6 +199,10 @@ bool MapperConfig::IsValid(std::string* why) const {
     *why = "MapperConfig.flat_box_shrink_fraction must be in [0, 0.5)";
     return false;
   }
+  if (!(min_segment_box_fill >= 0.f && min_segment_box_fill <= 1.f)) {
+    *why = "MapperConfig.min_segment_box_fill must be in [0, 1]";
+    return false;
+  }
   return true;
 }
 

@@ -67,11 +67,14 @@ struct MapperConfig {
   /// plane the segmentation separates everything else from).
   std::vector<int> surface_classes = {60 /* dining table */, 59 /* bed */};
   /// Detections of these COCO classes are often flat on a supporting plane (screens on walls,
-  /// keyboards and laptops on desks, sinks in counters): when plane pixels dominate their box,
-  /// they take the part of the plane the box covers. Small flat things (phones, remotes, books)
-  /// are left out: their spurious detections would turn patches of a table into objects.
-  std::vector<int> flat_classes = {62 /* tv */, 63 /* laptop */, 66 /* keyboard */, 71 /* sink */,
-                                   74 /* clock */};
+  /// keyboards and laptops on desks, sinks in counters) or show one large flat face (a fridge's
+  /// or an oven's front): when plane pixels dominate their box, they take the part of the plane
+  /// the box covers; when no segment of their own fills min_segment_box_fill of the box, the
+  /// part of the surface that dominates it. Small flat things (phones, remotes, books) are left
+  /// out: their spurious detections would turn patches of a table into objects.
+  std::vector<int> flat_classes = {62 /* tv */,   63 /* laptop */, 66 /* keyboard */,
+                                   71 /* sink */, 74 /* clock */,  72 /* refrigerator */,
+                                   69 /* oven */};
   /// Two detections of one class whose boxes overlap by less than this IoU but pick the same
   /// segment (two cups touching, books in a stack: one convex segment) share it out between
   /// their boxes and stay two observations. 0: the later one only adds its score to the first
@@ -80,6 +83,12 @@ struct MapperConfig {
   /// Flat-object boxes shrink by this fraction of their size on every side before cropping the
   /// plane (colour and depth are not registered, so box borders are unreliable).
   float flat_box_shrink_fraction = 0.1f;
+  /// A detection's segment must span at least this share of its box (the bounding box of the
+  /// segment's pixels over the detection box's area). A box bounds the visible object, so a
+  /// segment far smaller than it is a fragment: a handle, a patch of floor between the legs of
+  /// a fridge the segmentation did not separate, or whatever a spurious box landed on. Such an
+  /// observation would start an object with a model of the wrong thing.
+  float min_segment_box_fill = 0.2f;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
