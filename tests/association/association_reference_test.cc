@@ -64,27 +64,34 @@ float ReferenceFraction(const MapObject& object, const std::vector<Eigen::Vector
   return static_cast<float>(matched) / static_cast<float>(tested);
 }
 
-// AssignKeyframe's rule on reference fractions: best pairs first, one segment per object.
+// AssignKeyframe's rule on reference fractions: best pairs first (the match fraction less the
+// centroid distance in metres), one segment per object.
 std::vector<std::optional<ObjectId>> ReferenceAssignment(
     const ObjectMap& map, const std::vector<SegmentToAssociate>& segments,
     const AssociationConfig& config) {
   const Associator gate(config);  // candidates by centroid and the class gate only
   struct Pair {
-    float fraction;
+    float rank;
     std::size_t segment;
     ObjectId object;
   };
   std::vector<Pair> pairs;
   for (std::size_t s = 0; s < segments.size(); ++s) {
+    Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
+    for (const Eigen::Vector3f& p : segments[s].points_W) centroid += p;
+    centroid /= static_cast<float>(segments[s].points_W.size());
     for (ObjectId id : gate.Candidates(map, segments[s].points_W)) {
-      if (!gate.ClassCompatible(*map.Find(id), segments[s].class_id)) continue;
-      const float fraction = ReferenceFraction(*map.Find(id), segments[s].points_W,
+      const MapObject& object = *map.Find(id);
+      if (!gate.ClassCompatible(object, segments[s].class_id)) continue;
+      const float fraction = ReferenceFraction(object, segments[s].points_W,
                                                config.match_distance_m, config.max_test_points);
-      if (fraction >= config.min_match_fraction) pairs.push_back({fraction, s, id});
+      if (fraction >= config.min_match_fraction) {
+        pairs.push_back({fraction - (object.centroid_W - centroid).norm(), s, id});
+      }
     }
   }
   std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
-    return a.fraction != b.fraction ? a.fraction > b.fraction : a.segment < b.segment;
+    return a.rank != b.rank ? a.rank > b.rank : a.segment < b.segment;
   });
   std::vector<std::optional<ObjectId>> assignment(segments.size());
   std::vector<ObjectId> taken;

@@ -71,6 +71,37 @@ TEST(Associator, OneObjectTakesOneSegmentPerKeyframe) {
   EXPECT_TRUE(joins[0] == merged || joins[1] == merged);
 }
 
+// Two books in a stack, each 1.5 cm thick: every point of either lies within 2 cm of the other,
+// so a segment of one matches both in full. The nearer centroid decides, whichever order the
+// segments come in and whichever object is older.
+TEST(Associator, StackedThinObjectsGoToTheNearerCentroid) {
+  const int kBook = CocoClassId("book");
+  const auto lower = testing::BoxSurface({0, 0, 0}, {0.24f, 0.17f, 0.015f}, 0.005f);
+  const auto upper = Shifted(lower, {0, 0, 0.015f});
+  for (const bool upper_first : {false, true}) {
+    ObjectMap map;
+    const ObjectId lower_id =
+        map.AddObject(Observation(1, kBook, upper_first ? upper : lower), kIdentity);
+    const ObjectId upper_id =
+        map.AddObject(Observation(1, kBook, upper_first ? lower : upper), kIdentity);
+    const ObjectId lower_object = upper_first ? upper_id : lower_id;
+    const ObjectId upper_object = upper_first ? lower_id : upper_id;
+    Associator associator{AssociationConfig{}};
+    ASSERT_FLOAT_EQ(associator.MatchFraction(*map.Find(lower_object), upper), 1.f);
+    ASSERT_FLOAT_EQ(associator.MatchFraction(*map.Find(upper_object), lower), 1.f);
+    for (const bool upper_segment_first : {false, true}) {
+      std::vector<SegmentToAssociate> segments = {{lower, kBook}, {upper, kBook}};
+      if (upper_segment_first) std::swap(segments[0], segments[1]);
+      const auto joins = associator.AssignKeyframe(map, segments);
+      ASSERT_EQ(joins.size(), 2u);
+      EXPECT_EQ(joins[upper_segment_first ? 1 : 0], lower_object);
+      EXPECT_EQ(joins[upper_segment_first ? 0 : 1], upper_object);
+      // Alone, too: the upper book's segment goes to the upper book.
+      EXPECT_EQ(associator.AssignKeyframe(map, {{upper, kBook}})[0], upper_object);
+    }
+  }
+}
+
 TEST(Associator, FindsDuplicatesOfTheSameLabelOnly) {
   ObjectMap map;
   const auto table = testing::BoxSurface({0, 0, 0}, {1.0f, 0.6f, 0.02f}, 0.01f);
