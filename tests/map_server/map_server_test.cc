@@ -192,6 +192,43 @@ TEST_F(MapServerScene, QueriesByClassRegionAndNearest) {
   EXPECT_EQ(inventory[0].count, 2);
 }
 
+TEST_F(MapServerScene, ARayStoppedByTheStructureOnACupsSurfaceNamesTheCup) {
+  auto server = OpenServer();
+  ASSERT_TRUE(server);
+  IngestAllViews(server.get());
+  // A fourth keyframe in which nothing was detected: its cup surfaces go into the OctoMap as
+  // structure. Its depth puts the cups' faces 7 mm nearer (sensor noise), so the ray meets a
+  // structure voxel (centre x = -0.055) before it passes the cups' model points (x = -0.05).
+  std::vector<SceneBox> nearer = boxes_;
+  for (int cup : {1, 2}) nearer[cup].lo.x() -= 0.007;
+  RgbdFrame frame = testing::RenderFrame(nearer, K_, Pose(0), "undetected");
+  AddKeyframeOutcome outcome;
+  ASSERT_TRUE(server->AddKeyframe(frame, {}, &outcome).ok());
+
+  const auto cups = Cups(*server);
+  ASSERT_EQ(cups.size(), 2u);
+  for (const auto& cup : cups) {
+    const Eigen::Vector3d centre = cup->centroid_W.cast<double>();
+    RayHit hit;
+    ObjectId object_hit = -1;
+    std::uint64_t version = 0;
+    ASSERT_TRUE(
+        server->CastRay(eyes_[0], centre - eyes_[0], 5.0, false, &hit, &object_hit, &version).ok());
+    EXPECT_TRUE(hit.hit);
+    EXPECT_EQ(object_hit, cup->id) << "hit at " << hit.voxel_center_W.transpose();
+  }
+  // The table top beside the cups is still structure only.
+  RayHit hit;
+  ObjectId object_hit = -1;
+  std::uint64_t version = 0;
+  const Eigen::Vector3d table_point(-0.3, 0.0, 0.70);
+  ASSERT_TRUE(server->CastRay(eyes_[0], table_point - eyes_[0], 5.0, false, &hit, &object_hit,
+                              &version)
+                  .ok());
+  EXPECT_TRUE(hit.hit);
+  EXPECT_EQ(object_hit, 0);
+}
+
 TEST_F(MapServerScene, BadRequestsNameTheFieldAndChangeNothing) {
   auto server = OpenServer();
   ASSERT_TRUE(server);

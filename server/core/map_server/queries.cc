@@ -232,6 +232,28 @@ ServiceStatus MapServer::CastRay(const Eigen::Vector3d& origin_W,
       hit->distance_m = along;
     }
   }
+  // The structure's voxels also hold object surfaces seen in keyframes where the object was not
+  // segmented (not detected, or only part of it). A structure voxel that an object's model
+  // reaches (a model point within the two voxels' half diagonals) is that object's surface.
+  if (*object_hit == 0 && hit->hit && hit->state == VoxelState::kOccupied) {
+    const double surface_m =
+        radius + 0.5 * std::sqrt(3.0) * impl_->config.mapper.occupancy.resolution_m;
+    double nearest_sq = surface_m * surface_m;
+    const Eigen::Vector3f voxel = hit->voxel_center_W.cast<float>();
+    for (const auto& [id, view] : snapshot->objects) {
+      if (!view->model_W ||
+          !BoxesOverlap(view->min_W, view->max_W, hit->voxel_center_W.array() - surface_m,
+                        hit->voxel_center_W.array() + surface_m)) {
+        continue;
+      }
+      for (const Eigen::Vector3f& point : view->model_W->points) {
+        const double distance_sq = (point - voxel).cast<double>().squaredNorm();
+        if (distance_sq > nearest_sq) continue;
+        nearest_sq = distance_sq;
+        *object_hit = id;
+      }
+    }
+  }
   return ServiceStatus::Ok();
 }
 
