@@ -88,6 +88,14 @@ TEST(CenterNetDetectorTest, RejectsBadConfigAndMissingModel) {
   EXPECT_EQ(MakeCenterNetDetector(config, &why), nullptr);
   EXPECT_NE(why.find("input_size"), std::string::npos) << why;
   config = CenterNetConfig();
+  config.tiles_per_side = 0;
+  EXPECT_EQ(MakeCenterNetDetector(config, &why), nullptr);
+  EXPECT_NE(why.find("tiles_per_side"), std::string::npos) << why;
+  config = CenterNetConfig();
+  config.tile_overlap = 0.95f;
+  EXPECT_EQ(MakeCenterNetDetector(config, &why), nullptr);
+  EXPECT_NE(why.find("tile_overlap"), std::string::npos) << why;
+  config = CenterNetConfig();
   config.model_path = "/nonexistent/centernet.pb";
   EXPECT_EQ(MakeCenterNetDetector(config, &why), nullptr);
   EXPECT_NE(why.find("/nonexistent/centernet.pb"), std::string::npos) << why;
@@ -162,6 +170,39 @@ TEST(CenterNetDetectorTest, FindsKitchenObjectsOnRedKitchenFrame500) {
   EXPECT_NEAR(0.5f * (cup->box.y_min + cup->box.y_max), 271.f, 20.f);
   EXPECT_NEAR(cup->box.Width(), 40.f, 20.f);
   EXPECT_NEAR(cup->box.Height(), 45.f, 20.f);
+}
+
+// Tiles add passes over parts of the image scaled up: what the whole image found stays (at the
+// same or a better score), boxes stay inside the image and in descending score order.
+TEST(CenterNetDetectorTest, TiledInferenceKeepsTheWholeImagesObjects) {
+  OBJMAP_REQUIRE_PATH(kModelPath);
+  OBJMAP_REQUIRE_PATH(ColorPath(500));
+  RgbdFrame frame;
+  ASSERT_TRUE(LoadFrame(500, &frame));
+  CenterNetConfig config;
+  config.model_path = kModelPath;
+  std::string why;
+  std::unique_ptr<Detector> whole = MakeCenterNetDetector(config, &why);
+  ASSERT_NE(whole, nullptr) << why;
+  config.tiles_per_side = 2;
+  std::unique_ptr<Detector> tiled = MakeCenterNetDetector(config, &why);
+  ASSERT_NE(tiled, nullptr) << why;
+  std::vector<Detection> plain, with_tiles;
+  ASSERT_TRUE(whole->Detect(frame, &plain, &why)) << why;
+  ASSERT_TRUE(tiled->Detect(frame, &with_tiles, &why)) << why;
+  Print("frame 500, 2 x 2 tiles", with_tiles);
+  for (const char* name : {"chair", "cup", "tv"}) {
+    EXPECT_GE(BestScore(with_tiles, name), BestScore(plain, name)) << name;
+  }
+  for (std::size_t i = 0; i < with_tiles.size(); ++i) {
+    const Detection& d = with_tiles[i];
+    if (i > 0) EXPECT_LE(d.score, with_tiles[i - 1].score);
+    EXPECT_GE(d.score, config.score_threshold);
+    EXPECT_GE(d.box.x_min, 0.f);
+    EXPECT_LE(d.box.x_max, static_cast<float>(frame.color.width));
+    EXPECT_GE(d.box.y_min, 0.f);
+    EXPECT_LE(d.box.y_max, static_cast<float>(frame.color.height));
+  }
 }
 
 }  // namespace

@@ -124,6 +124,8 @@ void VisitObjmapConfig(ObjmapConfig* c, Visitor& v) {
   v("max_detections", &d.max_detections);
   v("num_threads", &d.num_threads);
   v("nms_iou", &d.nms_iou);
+  v("tiles_per_side", &d.tiles_per_side);
+  v("tile_overlap", &d.tile_overlap);
   v.Finish();
 }
 

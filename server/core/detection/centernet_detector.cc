@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "detection/centernet_decode.h"
+#include "detection/tiling.h"
 #include "types/coco_classes.h"
 
 namespace objmap {
@@ -31,7 +32,8 @@ bool HasShape(const cv::Mat& m, int channels) {
          m.isContinuous();
 }
 
-CenterNetDecodeParams MakeDecodeParams(const CenterNetConfig& config, const ColorImage& image,
+// Decoding of a network pass over a `width` x `height` region of the image.
+CenterNetDecodeParams MakeDecodeParams(const CenterNetConfig& config, int width, int height,
                                        const cv::Mat& heatmap) {
   const float input_px = static_cast<float>(config.input_size);
   CenterNetDecodeParams params;
@@ -39,10 +41,10 @@ CenterNetDecodeParams MakeDecodeParams(const CenterNetConfig& config, const Colo
   params.grid_height = heatmap.size[2];
   params.grid_width = heatmap.size[3];
   params.stride_px = input_px / static_cast<float>(params.grid_width);
-  params.scale_x = static_cast<float>(image.width) / input_px;
-  params.scale_y = static_cast<float>(image.height) / input_px;
-  params.image_width = static_cast<float>(image.width);
-  params.image_height = static_cast<float>(image.height);
+  params.scale_x = static_cast<float>(width) / input_px;
+  params.scale_y = static_cast<float>(height) / input_px;
+  params.image_width = static_cast<float>(width);
+  params.image_height = static_cast<float>(height);
   params.score_threshold = config.score_threshold;
   params.max_detections = config.max_detections;
   params.nms_iou = config.nms_iou;
@@ -60,27 +62,22 @@ class CenterNetDetector final : public Detector {
   std::string Name() const override { return "centernet"; }
 
  private:
+  // One network pass over `region` of `rgb`; boxes in the region's pixels.
+  bool DetectIn(const cv::Mat& rgb, const cv::Rect& region, const RgbdFrame& frame,
+                std::vector<Detection>* detections, std::string* why);
+
   CenterNetConfig config_;
   cv::dnn::Net net_;
   std::vector<cv::Mat> outputs_;  // reused between frames to avoid reallocation
 };
 
-bool CenterNetDetector::Detect(const RgbdFrame& frame, std::vector<Detection>* detections,
-                               std::string* why) {
-  detections->clear();
-  const ColorImage& image = frame.color;
-  if (image.empty() || image.rgb.size() != static_cast<std::size_t>(image.width) *
-                                               static_cast<std::size_t>(image.height) * 3) {
-    SetWhy(why, FrameLabel(frame) + ": colour image is empty or its size does not match");
-    return false;
-  }
+bool CenterNetDetector::DetectIn(const cv::Mat& rgb, const cv::Rect& region,
+                                 const RgbdFrame& frame, std::vector<Detection>* detections,
+                                 std::string* why) {
   // The network takes RGB 0-255 without normalisation; a plain (non letter-boxed) resize is what
   // the TF.js model was run with.
-  // Read-only view of the caller's pixels; resize writes into its own buffer.
-  const cv::Mat rgb(image.height, image.width, CV_8UC3,
-                    const_cast<std::uint8_t*>(image.rgb.data()));
   cv::Mat resized;
-  cv::resize(rgb, resized, cv::Size(config_.input_size, config_.input_size), 0, 0,
+  cv::resize(rgb(region), resized, cv::Size(config_.input_size, config_.input_size), 0, 0,
              cv::INTER_LINEAR);
   net_.setInput(
       cv::dnn::blobFromImage(resized, 1.0, cv::Size(), cv::Scalar(), false, false, CV_32F));
@@ -97,8 +94,56 @@ bool CenterNetDetector::Detect(const RgbdFrame& frame, std::vector<Detection>* d
     SetWhy(why, FrameLabel(frame) + ": network outputs have unexpected shapes");
     return false;
   }
-  const CenterNetDecodeParams params = MakeDecodeParams(config_, image, heatmap);
+  const CenterNetDecodeParams params =
+      MakeDecodeParams(config_, region.width, region.height, heatmap);
   *detections = DecodeCenterNet(heatmap.ptr<float>(), boxes.ptr<float>(), params);
+  return true;
+}
+
+bool CenterNetDetector::Detect(const RgbdFrame& frame, std::vector<Detection>* detections,
+                               std::string* why) {
+  detections->clear();
+  const ColorImage& image = frame.color;
+  if (image.empty() || image.rgb.size() != static_cast<std::size_t>(image.width) *
+                                               static_cast<std::size_t>(image.height) * 3) {
+    SetWhy(why, FrameLabel(frame) + ": colour image is empty or its size does not match");
+    return false;
+  }
+  // Read-only view of the caller's pixels; resize writes into its own buffer.
+  const cv::Mat rgb(image.height, image.width, CV_8UC3,
+                    const_cast<std::uint8_t*>(image.rgb.data()));
+  std::vector<Detection> whole_image;
+  if (!DetectIn(rgb, cv::Rect(0, 0, image.width, image.height), frame, &whole_image, why)) {
+    return false;
+  }
+  const std::vector<ImageTile> grid =
+      TileGrid(image.width, image.height, config_.tiles_per_side, config_.tile_overlap);
+  if (grid.empty()) {
+    *detections = std::move(whole_image);
+    return true;
+  }
+  std::vector<TileDetections> tiles;
+  tiles.reserve(grid.size());
+  for (const ImageTile& tile : grid) {
+    TileDetections& in_tile = tiles.emplace_back();
+    in_tile.tile = tile;
+    if (!DetectIn(rgb, cv::Rect(tile.x, tile.y, tile.width, tile.height), frame,
+                  &in_tile.detections, why)) {
+      return false;
+    }
+    for (Detection& detection : in_tile.detections) {
+      detection.box.x_min += static_cast<float>(tile.x);
+      detection.box.x_max += static_cast<float>(tile.x);
+      detection.box.y_min += static_cast<float>(tile.y);
+      detection.box.y_max += static_cast<float>(tile.y);
+    }
+  }
+  TileMergeParams merge;
+  merge.image_width = image.width;
+  merge.image_height = image.height;
+  merge.nms_iou = config_.nms_iou;
+  merge.max_detections = config_.max_detections;
+  *detections = MergeTileDetections(std::move(whole_image), tiles, merge);
   return true;
 }
 
@@ -128,6 +173,14 @@ bool CenterNetConfig::IsValid(std::string* why) const {
   }
   if (!(nms_iou > 0.f && nms_iou <= 1.f)) {
     SetWhy(why, "centernet: nms_iou must lie in (0, 1]");
+    return false;
+  }
+  if (tiles_per_side < 1 || tiles_per_side > 4) {
+    SetWhy(why, "centernet: tiles_per_side must lie in [1, 4]");
+    return false;
+  }
+  if (!(tile_overlap >= 0.f && tile_overlap < 0.9f)) {
+    SetWhy(why, "centernet: tile_overlap must lie in [0, 0.9)");
     return false;
   }
   return true;

@@ -23,6 +23,13 @@ struct CenterNetConfig {
   int num_threads = 0;
   /// Same-class boxes overlapping a better one by more than this IoU are dropped; 1 disables.
   float nms_iou = 0.6f;
+  /// Small objects: with N >= 2 the network also runs on N x N overlapping tiles of the image,
+  /// each resized to the input (objects appear about N times larger), and the tiles' detections
+  /// join the whole image's (detection/tiling.h). Costs N * N more network passes per image;
+  /// 1: the whole image only.
+  int tiles_per_side = 1;
+  /// Neighbouring tiles overlap by this fraction of a tile's side.
+  float tile_overlap = 0.25f;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
