@@ -196,7 +196,9 @@ TEST(CenterNetDetectorTest, TiledInferenceKeepsTheWholeImagesObjects) {
   }
   for (std::size_t i = 0; i < with_tiles.size(); ++i) {
     const Detection& d = with_tiles[i];
-    if (i > 0) EXPECT_LE(d.score, with_tiles[i - 1].score);
+    if (i > 0) {
+      EXPECT_LE(d.score, with_tiles[i - 1].score);
+    }
     EXPECT_GE(d.score, config.score_threshold);
     EXPECT_GE(d.box.x_min, 0.f);
     EXPECT_LE(d.box.x_max, static_cast<float>(frame.color.width));
