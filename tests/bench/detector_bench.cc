@@ -45,7 +45,10 @@ struct Tally {
   int correct = 0;
   double ms = 0.0;
   int images = 0;
-  std::map<int, std::pair<int, int>> per_class;  // class -> (truth, found)
+  struct PerClass {
+    int truth = 0, found = 0, detections = 0, correct = 0;
+  };
+  std::map<int, PerClass> per_class;
 };
 
 std::map<int, int> ReadClasses(const std::string& scene_dir) {
@@ -98,19 +101,21 @@ void Score(const std::vector<objmap::Detection>& detections, const std::vector<T
       if (iou >= best_iou) best_iou = iou, best = static_cast<int>(i);
     }
     ++tally->detections;
+    ++tally->per_class[d.class_id].detections;
     if (best >= 0) {
       taken[static_cast<std::size_t>(best)] = true;
       ++tally->correct;
+      ++tally->per_class[d.class_id].correct;
     }
   }
   for (std::size_t i = 0; i < truth.size(); ++i) {
     const int band = Band(truth[i].pixels);
     ++tally->truth[band];
-    auto& per_class = tally->per_class[truth[i].class_id];
-    ++per_class.first;
+    Tally::PerClass& per_class = tally->per_class[truth[i].class_id];
+    ++per_class.truth;
     if (taken[i]) {
       ++tally->found[band];
-      ++per_class.second;
+      ++per_class.found;
     }
   }
 }
@@ -206,7 +211,9 @@ int main(int argc, char** argv) {
       all.detections += t.detections, all.correct += t.correct;
       all.ms += t.ms, all.images += t.images;
       for (const auto& [c, counts] : t.per_class) {
-        all.per_class[c].first += counts.first, all.per_class[c].second += counts.second;
+        Tally::PerClass& sum = all.per_class[c];
+        sum.truth += counts.truth, sum.found += counts.found;
+        sum.detections += counts.detections, sum.correct += counts.correct;
       }
     }
   }
@@ -225,13 +232,20 @@ int main(int argc, char** argv) {
                   t.truth[b] ? 1.0 * t.found[b] / t.truth[b] : 0.0, t.found[b], t.truth[b]);
     }
   }
-  std::printf("\nper class (truth boxes; found by each setting):\n");
-  for (const auto& [c, counts] : tallies[0].per_class) {
-    std::printf("  %-14s %5d", std::string(objmap::CocoClassName(c)).c_str(), counts.first);
+  std::printf(
+      "\nper class: truth boxes; for each setting, found (recall) and detections (precision)\n");
+  std::map<int, int> truth_per_class;
+  for (const Tally& t : tallies) {
+    for (const auto& [c, counts] : t.per_class) truth_per_class[c] = counts.truth;
+  }
+  for (const auto& [c, truth] : truth_per_class) {
+    std::printf("  %-14s %5d", std::string(objmap::CocoClassName(c)).c_str(), truth);
     for (const Tally& t : tallies) {
       const auto it = t.per_class.find(c);
-      const int found = it == t.per_class.end() ? 0 : it->second.second;
-      std::printf("  %5d (%.2f)", found, counts.first ? 1.0 * found / counts.first : 0.0);
+      const Tally::PerClass counts = it == t.per_class.end() ? Tally::PerClass{} : it->second;
+      std::printf("  | %5d (%.2f) %5d (%.2f)", counts.found, truth ? 1.0 * counts.found / truth : 0.0,
+                  counts.detections,
+                  counts.detections ? 1.0 * counts.correct / counts.detections : 0.0);
     }
     std::printf("\n");
   }

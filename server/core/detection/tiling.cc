@@ -60,16 +60,9 @@ std::vector<Detection> MergeTileDetections(std::vector<Detection> whole_image,
       if (!CutByTile(detection.box, tile.tile, params)) all.push_back(detection);
     }
   }
-  std::vector<Detection> same_class = ClassWiseNms(std::move(all), params.nms_iou);
-  // Best first after ClassWiseNms; one object seen as two classes keeps its better class.
-  std::vector<Detection> kept;
-  kept.reserve(same_class.size());
-  for (const Detection& candidate : same_class) {
-    const bool suppressed = std::any_of(kept.begin(), kept.end(), [&](const Detection& better) {
-      return BoxIoU(better.box, candidate.box) > params.cross_class_iou;
-    });
-    if (!suppressed) kept.push_back(candidate);
-    if (kept.size() >= static_cast<std::size_t>(std::max(params.max_detections, 0))) break;
+  std::vector<Detection> kept = ClassWiseNms(std::move(all), params.nms_iou);
+  if (kept.size() > static_cast<std::size_t>(std::max(params.max_detections, 0))) {
+    kept.resize(static_cast<std::size_t>(std::max(params.max_detections, 0)));
   }
   return kept;
 }

@@ -37,15 +37,13 @@ struct TileMergeParams {
   float border_margin_px = 3.f;
   /// Same-class boxes overlapping a better one by more than this IoU are the same object.
   float nms_iou = 0.6f;
-  /// Boxes of any class overlapping a better one by more than this IoU are one object seen as
-  /// two classes: only the better one is kept.
-  float cross_class_iou = 0.85f;
   /// At most this many detections, best first.
   int max_detections = 100;
 };
 
 /// The whole image's detections joined by the tiles' (less those cut by a tile border), with
-/// duplicates removed: same class above nms_iou, any class above cross_class_iou. Best first.
+/// same-class duplicates (IoU above nms_iou) removed. Best first. Like the whole image's own
+/// output, one box may come with several classes: the object map accumulates class scores.
 [[nodiscard]] std::vector<Detection> MergeTileDetections(std::vector<Detection> whole_image,
                                                          const std::vector<TileDetections>& tiles,
                                                          const TileMergeParams& params);
