@@ -5,11 +5,6 @@
 //   detector_bench MODEL STEP SCENE_DIR... [--tiles N]... [--overlap F] [--min-px N]
 // e.g. detector_bench models/centernet_coco.pb 10 /tmp/s/desk-31 /tmp/s/office-31 --tiles 1
 //      --tiles 2
-#include <nlohmann/json.hpp>
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -17,6 +12,10 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
 
@@ -243,8 +242,8 @@ int main(int argc, char** argv) {
     for (const Tally& t : tallies) {
       const auto it = t.per_class.find(c);
       const Tally::PerClass counts = it == t.per_class.end() ? Tally::PerClass{} : it->second;
-      std::printf("  | %5d (%.2f) %5d (%.2f)", counts.found, truth ? 1.0 * counts.found / truth : 0.0,
-                  counts.detections,
+      std::printf("  | %5d (%.2f) %5d (%.2f)", counts.found,
+                  truth ? 1.0 * counts.found / truth : 0.0, counts.detections,
                   counts.detections ? 1.0 * counts.correct / counts.detections : 0.0);
     }
     std::printf("\n");

@@ -66,9 +66,8 @@ TEST(MergeTileDetections, TilesAddSmallObjectsAndDropBoxesTheirBordersCut) {
   const std::vector<Detection> merged = MergeTileDetections(whole, {tile}, params);
 
   ASSERT_EQ(merged.size(), 4u);
-  EXPECT_TRUE(std::is_sorted(merged.begin(), merged.end(), [](const auto& a, const auto& b) {
-    return a.score > b.score;
-  }));
+  EXPECT_TRUE(std::is_sorted(merged.begin(), merged.end(),
+                             [](const auto& a, const auto& b) { return a.score > b.score; }));
   EXPECT_EQ(merged[0].class_id, kCup);  // the tile's better view of the cup replaces the whole's
   EXPECT_FLOAT_EQ(merged[0].score, 0.8f);
   EXPECT_EQ(merged[1].class_id, kTable);  // the whole image's table, not the tile's cut one
@@ -86,8 +85,8 @@ TEST(MergeTileDetections, ClassesOfOneBoxStayAndTheCapHolds) {
   // A bowl in the tile where the whole image saw a cup: both classes stay, as the whole image's
   // own alternatives do (the object map weighs class scores over views).
   tile.detections = {Make(40, 40, 80, 80, 45, 0.6f)};
-  std::vector<Detection> merged = MergeTileDetections({Make(40, 41, 80, 80, 41, 0.5f)}, {tile},
-                                                      params);
+  std::vector<Detection> merged =
+      MergeTileDetections({Make(40, 41, 80, 80, 41, 0.5f)}, {tile}, params);
   ASSERT_EQ(merged.size(), 2u);
   EXPECT_EQ(merged[0].class_id, 45);
   EXPECT_EQ(merged[1].class_id, 41);

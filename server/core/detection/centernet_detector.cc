@@ -71,9 +71,8 @@ class CenterNetDetector final : public Detector {
   std::vector<cv::Mat> outputs_;  // reused between frames to avoid reallocation
 };
 
-bool CenterNetDetector::DetectIn(const cv::Mat& rgb, const cv::Rect& region,
-                                 const RgbdFrame& frame, std::vector<Detection>* detections,
-                                 std::string* why) {
+bool CenterNetDetector::DetectIn(const cv::Mat& rgb, const cv::Rect& region, const RgbdFrame& frame,
+                                 std::vector<Detection>* detections, std::string* why) {
   // The network takes RGB 0-255 without normalisation; a plain (non letter-boxed) resize is what
   // the TF.js model was run with.
   cv::Mat resized;

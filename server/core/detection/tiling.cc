@@ -31,8 +31,7 @@ bool CutByTile(const BoundingBox2D& box, const ImageTile& tile, const TileMergeP
   const float left = static_cast<float>(tile.x), top = static_cast<float>(tile.y);
   const float right = static_cast<float>(tile.x + tile.width);
   const float bottom = static_cast<float>(tile.y + tile.height);
-  return (tile.x > 0 && box.x_min <= left + margin) ||
-         (tile.y > 0 && box.y_min <= top + margin) ||
+  return (tile.x > 0 && box.x_min <= left + margin) || (tile.y > 0 && box.y_min <= top + margin) ||
          (tile.x + tile.width < params.image_width && box.x_max >= right - 1.f - margin) ||
          (tile.y + tile.height < params.image_height && box.y_max >= bottom - 1.f - margin);
 }
