@@ -527,6 +527,65 @@ TEST_F(MapperScene, AFlatObjectOnASurfaceThatIsNoPlaneIsThePartItsBoxCovers) {
   EXPECT_EQ(without->objects().size(), 0u) << "the wall is no object's segment";
 }
 
+// A table detection's box (down to the floor, legs included) holds more planes than the top:
+// a chair's back standing in front of the table, the pieces of a top that a divider standing on
+// it cuts in two, and the top of a nearer table. The table is its whole top: the up-facing
+// pieces on one plane that meet, reaching highest in its box.
+TEST_F(MapperScene, ATableIsItsWholeTopNotAChairBackOrANearerTable) {
+  const int kTable = CocoClassId("dining table");
+  boxes_[3] = {{3.0, -2.0, 0.0}, {3.1, 2.0, 2.5}, {220, 220, 220}};  // the wall, farther back
+  boxes_.push_back({{-0.05, -0.05, 0.70}, {0.05, 0.05, 0.80}, {90, 90, 90}});  // post on the top
+  boxes_.push_back({{-0.58, -0.8, 0.70}, {0.58, -0.7, 0.80}, {90, 90, 90}});   // rail on the top
+  // The divider: a post and a rail cut the top's plane into pieces less than 20 cm apart.
+  boxes_.push_back({{-0.05, -0.7, 0.70}, {0.05, 0.8, 0.72}, {90, 90, 90}});
+  const SceneBox chair_back{{-0.74, -0.25, 0.45}, {-0.72, 0.25, 0.95}, {40, 120, 40}};
+  const SceneBox back_table{{1.3, -0.8, 0.60}, {2.0, 0.8, 0.70}, {150, 100, 60}};
+  boxes_.push_back(chair_back);
+  boxes_.push_back(back_table);
+  // Detection boxes hold the legs down to the floor, clipped to the image.
+  auto table_box = [&](const SceneBox& top, int view) {
+    SceneBox with_legs = top;
+    with_legs.lo.z() = 0.0;
+    BoundingBox2D box = Project(with_legs, Pose(view));
+    box.x_min = std::max(box.x_min, 0.f);
+    box.y_min = std::max(box.y_min, 0.f);
+    box.x_max = std::min(box.x_max, static_cast<float>(K_.width - 1));
+    box.y_max = std::min(box.y_max, static_cast<float>(K_.height - 1));
+    return box;
+  };
+  Mapper mapper{MapperConfig{}};
+  for (int view = 0; view < 3; ++view) {
+    const BoundingBox2D front = table_box(boxes_[0], view);
+    const BoundingBox2D back = table_box(back_table, view);
+    KeyframeResult result;
+    std::string why;
+    ASSERT_TRUE(mapper.AddKeyframe(Frame(view), {{front, kTable, 0.8f}, {back, kTable, 0.7f}},
+                                   &result, &why))
+        << why;
+    EXPECT_EQ(result.detections_used, 2) << "view " << view;
+  }
+  std::vector<const MapObject*> tables;
+  for (const auto& [id, object] : mapper.objects().objects()) {
+    if (object.Label() == kTable) tables.push_back(&object);
+  }
+  ASSERT_EQ(tables.size(), 2u);
+  std::sort(tables.begin(), tables.end(), [](const MapObject* a, const MapObject* b) {
+    return a->centroid_W.x() < b->centroid_W.x();
+  });
+  for (const MapObject* table : tables) {
+    EXPECT_EQ(table->observations.size(), 3u);
+    EXPECT_NEAR(table->centroid_W.z(), 0.70, 0.02) << "a top, not the chair's back";
+    EXPECT_LT(table->max_W.z() - table->min_W.z(), 0.06);
+  }
+  // The front table: both sides of the divider, and none of the back table.
+  EXPECT_GT(tables[0]->max_W.y() - tables[0]->min_W.y(), 1.2);
+  EXPECT_LT(tables[0]->max_W.x(), -0.4 + 1.1);
+  EXPECT_GT(tables[0]->min_W.x(), -0.65);
+  // The back table: its own top, not the nearer one its box also holds.
+  EXPECT_GT(tables[1]->min_W.x(), 1.25);
+  EXPECT_NEAR(tables[1]->centroid_W.x(), 1.65, 0.15);
+}
+
 TEST_F(MapperScene, BadInputIsRejectedAndChangesNothing) {
   Mapper mapper{MapperConfig{}};
   std::string why;

@@ -1,5 +1,6 @@
 #include "mapper/keyframe_segments.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -18,13 +19,98 @@ bool Inside(const BoundingBox2D& box, int u, int v) {
   return u >= box.x_min && u <= box.x_max && v >= box.y_min && v <= box.y_max;
 }
 
+// A surface's top faces the image's up at least this much (PlaneFit::UpFacing).
+constexpr float kMinUpFacing = 0.3f;
+// Pieces of one table top: their centres lie within this distance of each other's plane, and
+// their normals within acos(0.94) = 20 deg. Far below a table's height above the floor, and
+// above the depth noise of a top 2-3 m away.
+constexpr double kCoplanarDistanceM = 0.04;
+constexpr double kCoplanarMinCos = 0.94;
+// ... and each piece comes within this distance of another (camera frame): an object standing
+// on a top cuts it up, while the top of another table beyond an aisle is as coplanar but
+// farther away.
+constexpr float kTopPieceGapM = 0.2f;
+// Points per piece for that distance: spread over the piece, a few centimetres apart.
+constexpr int kTopPieceSamples = 256;
+
+// A table's top is the upper part of its box: what it holds up stands above it and its legs
+// below. A top reaches into the upper quarter of the box; the floor seen between the legs, in
+// the lower part, does not (when the top itself is not in view as a plane, for instance).
+constexpr float kTopReachesBoxShare = 0.25f;
+
+// A top spans at least this share of its box's width. A table seen at a grazing angle shows a
+// thin band of top over a box that its legs make tall, so the share of the box's area says
+// little; a book's top on it or a patch of floor between two legs spans a small part of the width.
+constexpr float kTopMinWidthShare = 0.5f;
+
+// A plane segment's centre and normal (turned towards the camera), camera frame.
+struct PlaneFit {
+  int segment = -1;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  std::vector<Eigen::Vector3f> samples;
+  // How much it faces up in the image: the normal's image-up component (-y). A camera looking
+  // level or down at a table (pitch below about 70 deg) sees its top facing up (> 0.3), while
+  // a chair's back or a wall facing the camera faces down or sideways (<= 0): the camera frame
+  // tells a top from a front without knowing which way the world's up is.
+  [[nodiscard]] double UpFacing() const { return -normal.y(); }
+};
+
+// Some sample of `a` lies within `gap` of some sample of `b`.
+bool PiecesMeet(const PlaneFit& a, const PlaneFit& b, float gap) {
+  const float gap_sq = gap * gap;
+  for (const Eigen::Vector3f& p : a.samples) {
+    for (const Eigen::Vector3f& q : b.samples) {
+      if ((p - q).squaredNorm() <= gap_sq) return true;
+    }
+  }
+  return false;
+}
+
+bool FitPlane(const OrganizedCloud& cloud_C, const SegmentIndex& index, int s, PlaneFit* fit) {
+  const int first = index.offsets[s], last = index.offsets[s + 1];
+  // Every few pixels: a plane's normal needs no more.
+  const int step = std::max(1, (last - first) / 2000);
+  fit->samples.clear();
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
+  int count = 0;
+  for (int k = first; k < last; k += step) {
+    const int i = index.pixel_ids[k];
+    if (!cloud_C.IsValid(i)) continue;
+    const Eigen::Vector3d p = cloud_C.points_C[i].cast<double>();
+    sum += p;
+    outer += p * p.transpose();
+    ++count;
+  }
+  if (count < 3) return false;
+  const int sample_step = std::max(1, (last - first) / kTopPieceSamples);
+  for (int k = first; k < last; k += sample_step) {
+    const int i = index.pixel_ids[k];
+    if (cloud_C.IsValid(i)) fit->samples.push_back(cloud_C.points_C[i]);
+  }
+  fit->segment = s;
+  fit->centre = sum / count;
+  const Eigen::Matrix3d covariance = outer / count - fit->centre * fit->centre.transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
+  fit->normal = solver.eigenvectors().col(0);  // smallest eigenvalue
+  if (fit->normal.dot(fit->centre) > 0.0) fit->normal = -fit->normal;
+  return true;
+}
+
 // A table top is a supporting plane, so SelectDetectionPixels never returns it. Surface classes
-// take a plane segment most of which lies in the box (the floor or a wall seen beyond the table
-// extends far outside it): of those with a good share of the box (a quarter of the best one's
-// pixels), the nearest. The top hides what lies below it, so a patch of floor seen between
-// the legs and cut off by them (also mostly inside the box) is always farther than the top.
+// take the up-facing plane segments mostly inside the box (the floor or a wall seen beyond the
+// table extends far outside it), grouped into tops: the pieces on one plane that meet (a top
+// cut up by what stands on it is several plane segments). Of the tops that span half the box's
+// width, reach into its upper quarter and hold a good share of its plane pixels (a quarter of
+// the most any top holds), the one reaching highest is the table: a table's box ends at its
+// top's far edge, while the floor between its legs and the top of a nearer table the box also
+// holds lie lower, a book's top on the table is too narrow, and the floor seen beyond the
+// table, which may reach higher, holds few of the box's pixels. A chair's back in front of the
+// table faces the camera, not up.
 std::vector<int> SurfacePlanePixels(const SegmentationResult& segmentation,
-                                    const SegmentIndex& index, const BoundingBox2D& box) {
+                                    const OrganizedCloud& cloud_C, const SegmentIndex& index,
+                                    const BoundingBox2D& box) {
   std::vector<int> inside(segmentation.num_segments, 0);
   const int u0 = std::max(0, static_cast<int>(std::ceil(box.x_min)));
   const int v0 = std::max(0, static_cast<int>(std::ceil(box.y_min)));
@@ -36,24 +122,73 @@ std::vector<int> SurfacePlanePixels(const SegmentationResult& segmentation,
       if (label >= 0 && segmentation.segment_is_plane[label]) ++inside[label];
     }
   }
-  std::vector<int> candidates;
-  int most_inside = 0;
+  std::vector<PlaneFit> tops;
   for (int s = 0; s < segmentation.num_segments; ++s) {
     const int total = segmentation.segment_is_plane[s] ? index.segments[s].pixels : 0;
     if (total == 0 || inside[s] * 2 < total) continue;
-    candidates.push_back(s);
-    most_inside = std::max(most_inside, inside[s]);
+    PlaneFit fit;
+    if (FitPlane(cloud_C, index, s, &fit) && fit.UpFacing() >= kMinUpFacing) tops.push_back(fit);
   }
-  int best = -1;
-  double best_depth = 0.0;
-  for (int s : candidates) {
-    if (inside[s] * 4 < most_inside) continue;
-    const double mean_depth = index.segments[s].sum_z / std::max(1, index.segments[s].pixels);
-    if (best < 0 || mean_depth < best_depth) best = s, best_depth = mean_depth;
+  std::sort(tops.begin(), tops.end(),
+            [](const PlaneFit& a, const PlaneFit& b) { return a.centre.z() < b.centre.z(); });
+  struct Top {
+    std::vector<const PlaneFit*> pieces;
+    int v_min = 0;
+    int inside = 0;
+  };
+  std::vector<Top> found;
+  int most_inside = 0;
+  for (const PlaneFit& seed : tops) {
+    // The seed's top grows by coplanar pieces near a piece it has (breadth first).
+    std::vector<const PlaneFit*> group = {&seed};
+    std::vector<bool> taken(tops.size(), false);
+    taken[static_cast<std::size_t>(&seed - tops.data())] = true;
+    for (std::size_t next = 0; next < group.size(); ++next) {
+      for (std::size_t k = 0; k < tops.size(); ++k) {
+        const PlaneFit& piece = tops[k];
+        if (taken[k] ||
+            std::abs(seed.normal.dot(piece.centre - seed.centre)) > kCoplanarDistanceM ||
+            seed.normal.dot(piece.normal) < kCoplanarMinCos ||
+            !PiecesMeet(*group[next], piece, kTopPieceGapM)) {
+          continue;
+        }
+        taken[k] = true;
+        group.push_back(&piece);
+      }
+    }
+    int u_min = segmentation.width, v_min = segmentation.height, u_max = -1, v_max = -1;
+    for (const PlaneFit* piece : group) {
+      const SegmentIndex::Segment& extent = index.segments[piece->segment];
+      u_min = std::min(u_min, extent.u_min), u_max = std::max(u_max, extent.u_max);
+      v_min = std::min(v_min, extent.v_min), v_max = std::max(v_max, extent.v_max);
+    }
+    const float width = std::min<float>(u_max + 1, box.x_max) - std::max<float>(u_min, box.x_min);
+    const float box_width =
+        std::min<float>(segmentation.width, box.x_max) - std::max(0.f, box.x_min);
+    if (width < kTopMinWidthShare * box_width ||
+        v_min > box.y_min + kTopReachesBoxShare * box.Height()) {
+      continue;
+    }
+    Top top{std::move(group), v_min, 0};
+    for (const PlaneFit* piece : top.pieces) top.inside += inside[piece->segment];
+    most_inside = std::max(most_inside, top.inside);
+    found.push_back(std::move(top));
   }
-  if (best < 0) return {};
-  return std::vector<int>(index.pixel_ids.begin() + index.offsets[best],
-                          index.pixel_ids.begin() + index.offsets[best + 1]);
+  // Seeds go nearest first, so of two tops reaching as high the nearer one stays.
+  const Top* best = nullptr;
+  for (const Top& top : found) {
+    if (top.inside * 4 < most_inside) continue;
+    if (best == nullptr || top.v_min < best->v_min) best = &top;
+  }
+  if (best == nullptr) return {};
+  std::vector<int> pixels;
+  for (const PlaneFit* piece : best->pieces) {
+    const int s = piece->segment;
+    pixels.insert(pixels.end(), index.pixel_ids.begin() + index.offsets[s],
+                  index.pixel_ids.begin() + index.offsets[s + 1]);
+  }
+  std::sort(pixels.begin(), pixels.end());
+  return pixels;
 }
 
 // Flat objects (a screen on a wall, a keyboard on a desk) lie within depth noise of their
@@ -126,12 +261,19 @@ float BoxFill(const std::vector<int>& pixels, int width, const BoundingBox2D& bo
   return std::min(1.f, w * h / box.Area());
 }
 
-std::vector<int> DetectionPixels(const SegmentationResult& segmentation, const SegmentIndex& index,
-                                 const BoundingBox2D& box, int class_id,
-                                 const MapperConfig& config) {
+// `is_top` tells a surface class's top (SurfacePlanePixels), which has passed its own test of
+// how much of the box it spans.
+std::vector<int> DetectionPixels(const SegmentationResult& segmentation,
+                                 const OrganizedCloud& cloud_C, const SegmentIndex& index,
+                                 const BoundingBox2D& box, int class_id, const MapperConfig& config,
+                                 bool* is_top) {
+  *is_top = false;
   if (Contains(config.surface_classes, class_id)) {
-    std::vector<int> pixels = SurfacePlanePixels(segmentation, index, box);
-    if (!pixels.empty()) return pixels;
+    std::vector<int> pixels = SurfacePlanePixels(segmentation, cloud_C, index, box);
+    if (!pixels.empty()) {
+      *is_top = true;
+      return pixels;
+    }
   }
   const bool flat = Contains(config.flat_classes, class_id);
   if (flat) {
@@ -264,11 +406,12 @@ std::vector<SegmentedDetection> SegmentDetections(
     const Detection& detection = detections[d];
     if (detection.score < config.min_detection_score || detection.box.Area() <= 0.f) continue;
     const BoundingBox2D box = ToDepthPixels(detection.box, frame.color, frame.depth);
-    const std::vector<int> pixels =
-        CropToBox(DetectionPixels(segmentation, index, box, detection.class_id, config), box,
-                  segmentation.width, config.detection_segment);
+    bool is_top = false;
+    const std::vector<int> pixels = CropToBox(
+        DetectionPixels(segmentation, cloud_C, index, box, detection.class_id, config, &is_top),
+        box, segmentation.width, config.detection_segment);
     if (pixels.empty() ||
-        BoxFill(pixels, segmentation.width, box) < config.min_segment_box_fill) {
+        (!is_top && BoxFill(pixels, segmentation.width, box) < config.min_segment_box_fill)) {
       continue;
     }
     bool handled = false;
