@@ -70,11 +70,12 @@ struct MapperConfig {
   /// keyboards and laptops on desks, sinks in counters) or show one large flat face (a fridge's
   /// or an oven's front): when plane pixels dominate their box, they take the part of the plane
   /// the box covers; when no segment of their own fills min_segment_box_fill of the box, the
-  /// part of the surface that dominates it. Small flat things (phones, remotes, books) are left
-  /// out: their spurious detections would turn patches of a table into objects.
-  std::vector<int> flat_classes = {62 /* tv */,   63 /* laptop */, 66 /* keyboard */,
-                                   71 /* sink */, 74 /* clock */,  72 /* refrigerator */,
-                                   69 /* oven */};
+  /// part of the surface that dominates it. Books lying on a desk are as flat: seen from a few
+  /// metres a stack of them joins the desk's segment. Phones and remotes are left out: their
+  /// spurious detections (often on patches of a table) would outnumber them.
+  std::vector<int> flat_classes = {62 /* tv */,   63 /* laptop */,       66 /* keyboard */,
+                                   71 /* sink */, 74 /* clock */,        72 /* refrigerator */,
+                                   69 /* oven */, 73 /* book */};
   /// Two detections of one class whose boxes overlap by less than this IoU but pick the same
   /// segment (two cups touching, books in a stack: one convex segment) share it out between
   /// their boxes and stay two observations. 0: the later one only adds its score to the first
