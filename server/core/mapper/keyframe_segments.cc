@@ -49,6 +49,8 @@ struct PlaneFit {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();
   std::vector<Eigen::Vector3f> samples;
+  Eigen::Vector3f samples_min = Eigen::Vector3f::Zero();
+  Eigen::Vector3f samples_max = Eigen::Vector3f::Zero();
   // How much it faces up in the image: the normal's image-up component (-y). A camera looking
   // level or down at a table (pitch below about 70 deg) sees its top facing up (> 0.3), while
   // a chair's back or a wall facing the camera faces down or sideways (<= 0): the camera frame
@@ -58,6 +60,11 @@ struct PlaneFit {
 
 // Some sample of `a` lies within `gap` of some sample of `b`.
 bool PiecesMeet(const PlaneFit& a, const PlaneFit& b, float gap) {
+  // Pieces whose sample bounds lie farther apart cannot meet: most pairs end here.
+  if (((a.samples_min.array() - gap) > b.samples_max.array()).any() ||
+      ((b.samples_min.array() - gap) > a.samples_max.array()).any()) {
+    return false;
+  }
   const float gap_sq = gap * gap;
   for (const Eigen::Vector3f& p : a.samples) {
     for (const Eigen::Vector3f& q : b.samples) {
@@ -88,6 +95,11 @@ bool FitPlane(const OrganizedCloud& cloud_C, const SegmentIndex& index, int s, P
   for (int k = first; k < last; k += sample_step) {
     const int i = index.pixel_ids[k];
     if (cloud_C.IsValid(i)) fit->samples.push_back(cloud_C.points_C[i]);
+  }
+  fit->samples_min = fit->samples_max = fit->samples.front();
+  for (const Eigen::Vector3f& p : fit->samples) {
+    fit->samples_min = fit->samples_min.cwiseMin(p);
+    fit->samples_max = fit->samples_max.cwiseMax(p);
   }
   fit->segment = s;
   fit->centre = sum / count;
@@ -131,6 +143,13 @@ std::vector<int> SurfacePlanePixels(const SegmentationResult& segmentation,
   }
   std::sort(tops.begin(), tops.end(),
             [](const PlaneFit& a, const PlaneFit& b) { return a.centre.z() < b.centre.z(); });
+  // Which pieces meet, once: every seed's growth asks again.
+  std::vector<std::vector<bool>> meet(tops.size(), std::vector<bool>(tops.size(), false));
+  for (std::size_t i = 0; i < tops.size(); ++i) {
+    for (std::size_t k = i + 1; k < tops.size(); ++k) {
+      meet[i][k] = meet[k][i] = PiecesMeet(tops[i], tops[k], kTopPieceGapM);
+    }
+  }
   struct Top {
     std::vector<const PlaneFit*> pieces;
     int v_min = 0;
@@ -140,22 +159,23 @@ std::vector<int> SurfacePlanePixels(const SegmentationResult& segmentation,
   int most_inside = 0;
   for (const PlaneFit& seed : tops) {
     // The seed's top grows by coplanar pieces near a piece it has (breadth first).
-    std::vector<const PlaneFit*> group = {&seed};
+    std::vector<std::size_t> members = {static_cast<std::size_t>(&seed - tops.data())};
     std::vector<bool> taken(tops.size(), false);
-    taken[static_cast<std::size_t>(&seed - tops.data())] = true;
-    for (std::size_t next = 0; next < group.size(); ++next) {
+    taken[members.front()] = true;
+    for (std::size_t next = 0; next < members.size(); ++next) {
       for (std::size_t k = 0; k < tops.size(); ++k) {
         const PlaneFit& piece = tops[k];
-        if (taken[k] ||
+        if (taken[k] || !meet[members[next]][k] ||
             std::abs(seed.normal.dot(piece.centre - seed.centre)) > kCoplanarDistanceM ||
-            seed.normal.dot(piece.normal) < kCoplanarMinCos ||
-            !PiecesMeet(*group[next], piece, kTopPieceGapM)) {
+            seed.normal.dot(piece.normal) < kCoplanarMinCos) {
           continue;
         }
         taken[k] = true;
-        group.push_back(&piece);
+        members.push_back(k);
       }
     }
+    std::vector<const PlaneFit*> group;
+    for (std::size_t k : members) group.push_back(&tops[k]);
     int u_min = segmentation.width, v_min = segmentation.height, u_max = -1, v_max = -1;
     for (const PlaneFit* piece : group) {
       const SegmentIndex::Segment& extent = index.segments[piece->segment];
