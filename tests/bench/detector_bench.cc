@@ -174,6 +174,8 @@ int main(int argc, char** argv) {
     for (int index = 0;; index += step) {
       char stem[64];
       std::snprintf(stem, sizeof(stem), "/frame-%06d", index);
+      // The sequence ends at the first missing frame (imread would warn about it).
+      if (!std::filesystem::exists(scene + stem + ".color.png")) break;
       const cv::Mat bgr = cv::imread(scene + stem + ".color.png", cv::IMREAD_COLOR);
       const cv::Mat instance = cv::imread(scene + stem + ".instance.png", cv::IMREAD_UNCHANGED);
       if (bgr.empty() || instance.empty()) break;

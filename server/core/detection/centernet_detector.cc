@@ -62,7 +62,7 @@ class CenterNetDetector final : public Detector {
   std::string Name() const override { return "centernet"; }
 
  private:
-  // One network pass over `region` of `rgb`; boxes in the region's pixels.
+  // One network pass over `region` of `rgb`; boxes in the pixels of `rgb`.
   bool DetectIn(const cv::Mat& rgb, const cv::Rect& region, const RgbdFrame& frame,
                 std::vector<Detection>* detections, std::string* why);
 
@@ -96,6 +96,12 @@ bool CenterNetDetector::DetectIn(const cv::Mat& rgb, const cv::Rect& region, con
   const CenterNetDecodeParams params =
       MakeDecodeParams(config_, region.width, region.height, heatmap);
   *detections = DecodeCenterNet(heatmap.ptr<float>(), boxes.ptr<float>(), params);
+  for (Detection& detection : *detections) {
+    detection.box.x_min += static_cast<float>(region.x);
+    detection.box.x_max += static_cast<float>(region.x);
+    detection.box.y_min += static_cast<float>(region.y);
+    detection.box.y_max += static_cast<float>(region.y);
+  }
   return true;
 }
 
@@ -129,12 +135,6 @@ bool CenterNetDetector::Detect(const RgbdFrame& frame, std::vector<Detection>* d
     if (!DetectIn(rgb, cv::Rect(tile.x, tile.y, tile.width, tile.height), frame,
                   &in_tile.detections, why)) {
       return false;
-    }
-    for (Detection& detection : in_tile.detections) {
-      detection.box.x_min += static_cast<float>(tile.x);
-      detection.box.x_max += static_cast<float>(tile.x);
-      detection.box.y_min += static_cast<float>(tile.y);
-      detection.box.y_max += static_cast<float>(tile.y);
     }
   }
   TileMergeParams merge;

@@ -8,7 +8,7 @@
 namespace objmap {
 namespace {
 
-// Tiles of `per_side` along one image side of `length` pixels: start and length of each.
+// Tiles of `per_side` (>= 2) along one image side of `length` pixels: start and length of each.
 std::vector<std::pair<int, int>> SideSpans(int length, int per_side, float overlap) {
   // per_side tiles of side s overlapping by overlap * s cover s * (per_side - (per_side - 1) *
   // overlap) = length.
@@ -17,9 +17,8 @@ std::vector<std::pair<int, int>> SideSpans(int length, int per_side, float overl
   std::vector<std::pair<int, int>> spans;
   for (int i = 0; i < per_side; ++i) {
     // The last tile ends at the image border; the others step evenly.
-    const int start = per_side == 1 ? 0
-                                    : static_cast<int>(std::lround(
-                                          static_cast<double>(length - tile) * i / (per_side - 1)));
+    const int start =
+        static_cast<int>(std::lround(static_cast<double>(length - tile) * i / (per_side - 1)));
     spans.emplace_back(start, tile);
   }
   return spans;

@@ -151,12 +151,13 @@ std::vector<int> SurfacePlanePixels(const SegmentationResult& segmentation,
     }
   }
   struct Top {
-    std::vector<const PlaneFit*> pieces;
+    std::vector<std::size_t> pieces;  // indices into `tops`
     int v_min = 0;
     int inside = 0;
   };
   std::vector<Top> found;
   int most_inside = 0;
+  const float box_width = std::min<float>(segmentation.width, box.x_max) - std::max(0.f, box.x_min);
   for (const PlaneFit& seed : tops) {
     // The seed's top grows by coplanar pieces near a piece it has (breadth first).
     std::vector<std::size_t> members = {static_cast<std::size_t>(&seed - tops.data())};
@@ -174,23 +175,19 @@ std::vector<int> SurfacePlanePixels(const SegmentationResult& segmentation,
         members.push_back(k);
       }
     }
-    std::vector<const PlaneFit*> group;
-    for (std::size_t k : members) group.push_back(&tops[k]);
     int u_min = segmentation.width, v_min = segmentation.height, u_max = -1, v_max = -1;
-    for (const PlaneFit* piece : group) {
-      const SegmentIndex::Segment& extent = index.segments[piece->segment];
+    for (std::size_t k : members) {
+      const SegmentIndex::Segment& extent = index.segments[tops[k].segment];
       u_min = std::min(u_min, extent.u_min), u_max = std::max(u_max, extent.u_max);
       v_min = std::min(v_min, extent.v_min), v_max = std::max(v_max, extent.v_max);
     }
     const float width = std::min<float>(u_max + 1, box.x_max) - std::max<float>(u_min, box.x_min);
-    const float box_width =
-        std::min<float>(segmentation.width, box.x_max) - std::max(0.f, box.x_min);
     if (width < kTopMinWidthShare * box_width ||
         v_min > box.y_min + kTopReachesBoxShare * box.Height()) {
       continue;
     }
-    Top top{std::move(group), v_min, 0};
-    for (const PlaneFit* piece : top.pieces) top.inside += inside[piece->segment];
+    Top top{std::move(members), v_min, 0};
+    for (std::size_t k : top.pieces) top.inside += inside[tops[k].segment];
     most_inside = std::max(most_inside, top.inside);
     found.push_back(std::move(top));
   }
@@ -202,8 +199,8 @@ std::vector<int> SurfacePlanePixels(const SegmentationResult& segmentation,
   }
   if (best == nullptr) return {};
   std::vector<int> pixels;
-  for (const PlaneFit* piece : best->pieces) {
-    const int s = piece->segment;
+  for (std::size_t k : best->pieces) {
+    const int s = tops[k].segment;
     pixels.insert(pixels.end(), index.pixel_ids.begin() + index.offsets[s],
                   index.pixel_ids.begin() + index.offsets[s + 1]);
   }
