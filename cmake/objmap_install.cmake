@@ -2,6 +2,9 @@
 #   P/bin/                 objmap, objmap_server, objmap_node and objmap_dataset_player (those built)
 #   P/share/objmap/        models/centernet_coco.pb, objmap.example.yaml, launch/*.launch
 #   P/lib/objmap/          links to the ROS executables, where rosrun and roslaunch look
+#   P/share/objmap/launch/objmap.rviz, and with ROS: P/share/objmap_msgs (msg, srv), P/include/
+#   objmap_msgs, P/lib/python3/dist-packages/objmap_msgs and P/setup.bash, which puts them all
+#   on the ROS paths (source P/setup.bash; rosservice, rostopic, rospy, roslaunch)
 # The executables find the model relative to their own location (detection/model_location.h),
 # so nothing here is configured with P. Included by the top-level CMakeLists.txt after every
 # target exists.
@@ -53,6 +56,33 @@ foreach(launch_file ${_objmap_launch_files})
   install(FILES ${PROJECT_BINARY_DIR}/installed_launch/${name}
     DESTINATION ${OBJMAP_INSTALL_SHARE_DIR}/launch)
 endforeach()
+install(FILES ${PROJECT_SOURCE_DIR}/launch/objmap.rviz DESTINATION ${OBJMAP_INSTALL_SHARE_DIR}/launch)
+
+# catkin's setup files for the install (generated in catkin_generated/installspace, not installed
+# by catkin itself: cmake/objmap_ros.cmake). setup.bash and setup.zsh find their own folder; the
+# sh files name the prefix, which is only known at install time.
+if(OBJMAP_ROS_ENABLED)
+  set(_objmap_catkin_installspace ${PROJECT_BINARY_DIR}/catkin_generated/installspace)
+  install(FILES ${_objmap_catkin_installspace}/setup.bash ${_objmap_catkin_installspace}/setup.zsh
+    ${_objmap_catkin_installspace}/local_setup.bash ${_objmap_catkin_installspace}/local_setup.zsh
+    DESTINATION .)
+  install(PROGRAMS ${_objmap_catkin_installspace}/_setup_util.py
+    ${_objmap_catkin_installspace}/env.sh DESTINATION .)
+  install(CODE "
+    set(_prefix \"\$ENV{DESTDIR}\${CMAKE_INSTALL_PREFIX}\")
+    foreach(_name setup.sh local_setup.sh)
+      file(READ \"${_objmap_catkin_installspace}/\${_name}\" _text)
+      string(REPLACE \"_CATKIN_SETUP_DIR:=${CMAKE_INSTALL_PREFIX}}\"
+        \"_CATKIN_SETUP_DIR:=\${CMAKE_INSTALL_PREFIX}}\" _text \"\${_text}\")
+      file(WRITE \"\${_prefix}/\${_name}\" \"\${_text}\")
+      message(STATUS \"Installing: \${_prefix}/\${_name}\")
+    endforeach()
+    # The marker that makes the prefix a catkin workspace (its share/ joins ROS_PACKAGE_PATH).
+    if(NOT EXISTS \"\${_prefix}/.catkin\")
+      file(WRITE \"\${_prefix}/.catkin\" \"\")
+    endif()")
+endif()
+
 # roslaunch finds the package by its manifest (catkin_package installs it too in workspaces).
 if(NOT OBJMAP_ROS_ENABLED)
   install(FILES ${PROJECT_SOURCE_DIR}/package.xml DESTINATION ${OBJMAP_INSTALL_SHARE_DIR})

@@ -14,6 +14,11 @@ if(NOT DEFINED Python3_EXECUTABLE AND DEFINED PYTHON_EXECUTABLE)
   set(Python3_EXECUTABLE ${PYTHON_EXECUTABLE} CACHE FILEPATH "Python for the ROS CMake configs")
 endif()
 
+# catkin would install its setup files (setup.bash, _setup_util.py, the .catkin marker) with
+# absolute destinations under the CMAKE_INSTALL_PREFIX of configure time, so that `cmake
+# --install build --prefix P` wrote them outside P (into /usr/local by default).
+# cmake/objmap_install.cmake installs them under the prefix of install time instead.
+set(CATKIN_INSTALL_INTO_PREFIX_ROOT FALSE)
 # objmap's tests start their own rosmaster (tests/ros_node); catkin's test set-up would add a
 # second GoogleTest build beside the one tests/ finds.
 set(CATKIN_ENABLE_TESTING OFF CACHE BOOL "catkin's own test targets (objmap does not use them)")

@@ -93,7 +93,18 @@ TEST_F(Install, PutsExecutablesModelConfigurationAndLaunchFilesUnderThePrefix) {
     EXPECT_TRUE(fs::is_regular_file(Prefix() / "lib/objmap" / program)) << program;
   }
 #endif
+  // Nothing goes outside the prefix (catkin's own rules once put its setup files into the
+  // configure-time prefix, /usr/local).
+  const std::regex installed_line(R"re(-- (Installing|Up-to-date): ([^\n]+))re");
+  int installed_files = 0;
+  for (auto it = std::sregex_iterator(install_.output.begin(), install_.output.end(),
+                                      installed_line);
+       it != std::sregex_iterator(); ++it, ++installed_files) {
+    EXPECT_EQ((*it)[2].str().rfind(Prefix().string() + "/", 0), 0u) << (*it)[2].str();
+  }
+  EXPECT_GT(installed_files, 0) << install_.output;
   const fs::path share = Prefix() / "share/objmap";
+  EXPECT_TRUE(fs::is_regular_file(share / "launch/objmap.rviz"));
   EXPECT_EQ(ReadText(share / "objmap.example.yaml"),
             ReadText(fs::path(OBJMAP_SOURCE_DIR) / "server/core/config/objmap.example.yaml"));
   // The installed launch files load the installed configuration, which exists there.
@@ -149,6 +160,50 @@ TEST_F(Install, InstalledObjmapFindsItsModelFromAnyDirectory) {
             std::string::npos)
       << from_env.output;
   fs::rename(installed_model.string() + ".moved", installed_model);
+}
+
+// After `source PREFIX/setup.bash` in an otherwise bare environment, the ROS tools find objmap
+// and objmap_msgs: the Python messages (rospy, rosservice, rostopic), the definitions (rosmsg)
+// and the launch files with RViz (roslaunch).
+TEST_F(Install, SourcingTheInstalledSetupBashPutsObjmapOnTheRosPaths) {
+  ASSERT_EQ(install_.exit_code, 0) << install_.output;
+#ifndef OBJMAP_TEST_WITH_ROS
+  GTEST_SKIP() << "SKIPPED: needs a build with the ROS node (catkin and the ROS packages)";
+#else
+  for (const char* file : {"setup.bash", "setup.sh", "_setup_util.py", ".catkin",
+                           "share/objmap_msgs/package.xml", "share/objmap_msgs/msg/MapChange.msg",
+                           "share/objmap_msgs/srv/IsFree.srv",
+                           "lib/python3/dist-packages/objmap_msgs/srv/_IsFree.py",
+                           "lib/python3/dist-packages/objmap_msgs/msg/_MapChange.py"}) {
+    EXPECT_TRUE(fs::exists(Prefix() / file)) << file;
+  }
+  const TempFolder elsewhere("install_ros");
+  const std::string in_bare_shell =
+      "cd '" + elsewhere.path().string() + "' && env -i HOME=\"$HOME\" PATH=/usr/bin:/bin bash -c \"source '" +
+      (Prefix() / "setup.bash").string() + "' && ";
+  const testing::CommandResult python = RunCommand(
+      in_bare_shell +
+      "/usr/bin/python3 -c 'from objmap_msgs.srv import IsFree; print(IsFree._type)'\"");
+  EXPECT_EQ(python.exit_code, 0) << python.output;
+  EXPECT_NE(python.output.find("objmap_msgs/IsFree"), std::string::npos) << python.output;
+  const testing::CommandResult tools =
+      RunCommand("command -v rossrv roslaunch && /usr/bin/python3 -c 'import rospy'");
+  if (tools.exit_code != 0) {
+    GTEST_SKIP() << "SKIPPED: needs the ROS Python tools (rossrv, roslaunch, rospy: bash "
+                    "scripts/setup.sh) for the rest: "
+                 << tools.output;
+  }
+  const testing::CommandResult definition =
+      RunCommand(in_bare_shell + "rossrv show objmap_msgs/IsFree\"");
+  EXPECT_EQ(definition.exit_code, 0) << definition.output;
+  EXPECT_NE(definition.output.find("bool unknown_is_free"), std::string::npos)
+      << definition.output;
+  const testing::CommandResult launch =
+      RunCommand(in_bare_shell + "roslaunch --nodes objmap objmap.launch rviz:=true\"");
+  EXPECT_EQ(launch.exit_code, 0) << launch.output;
+  EXPECT_NE(launch.output.find("/objmap_node"), std::string::npos) << launch.output;
+  EXPECT_NE(launch.output.find("/objmap_rviz"), std::string::npos) << launch.output;
+#endif
 }
 
 TEST_F(Install, InstalledServerReadsTheInstalledConfiguration) {
