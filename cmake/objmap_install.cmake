@@ -66,8 +66,10 @@ if(OBJMAP_ROS_ENABLED)
   install(FILES ${_objmap_catkin_installspace}/setup.bash ${_objmap_catkin_installspace}/setup.zsh
     ${_objmap_catkin_installspace}/local_setup.bash ${_objmap_catkin_installspace}/local_setup.zsh
     DESTINATION .)
-  install(PROGRAMS ${_objmap_catkin_installspace}/_setup_util.py
-    ${_objmap_catkin_installspace}/env.sh DESTINATION .)
+  # catkin generates _setup_util.py for the install only when it installs it itself; the devel
+  # space's is the same file (nothing in it names a prefix).
+  install(PROGRAMS ${CATKIN_DEVEL_PREFIX}/_setup_util.py ${_objmap_catkin_installspace}/env.sh
+    DESTINATION .)
   install(CODE "
     set(_prefix \"\$ENV{DESTDIR}\${CMAKE_INSTALL_PREFIX}\")
     foreach(_name setup.sh local_setup.sh)
