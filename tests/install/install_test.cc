@@ -97,8 +97,8 @@ TEST_F(Install, PutsExecutablesModelConfigurationAndLaunchFilesUnderThePrefix) {
   // configure-time prefix, /usr/local).
   const std::regex installed_line(R"re(-- (Installing|Up-to-date): ([^\n]+))re");
   int installed_files = 0;
-  for (auto it = std::sregex_iterator(install_.output.begin(), install_.output.end(),
-                                      installed_line);
+  for (auto it =
+           std::sregex_iterator(install_.output.begin(), install_.output.end(), installed_line);
        it != std::sregex_iterator(); ++it, ++installed_files) {
     EXPECT_EQ((*it)[2].str().rfind(Prefix().string() + "/", 0), 0u) << (*it)[2].str();
   }
@@ -170,20 +170,21 @@ TEST_F(Install, SourcingTheInstalledSetupBashPutsObjmapOnTheRosPaths) {
 #ifndef OBJMAP_TEST_WITH_ROS
   GTEST_SKIP() << "SKIPPED: needs a build with the ROS node (catkin and the ROS packages)";
 #else
-  for (const char* file : {"setup.bash", "setup.sh", "_setup_util.py", ".catkin",
-                           "share/objmap_msgs/package.xml", "share/objmap_msgs/msg/MapChange.msg",
-                           "share/objmap_msgs/srv/IsFree.srv",
-                           "lib/python3/dist-packages/objmap_msgs/srv/_IsFree.py",
-                           "lib/python3/dist-packages/objmap_msgs/msg/_MapChange.py"}) {
+  for (const char* file :
+       {"setup.bash", "setup.sh", "_setup_util.py", ".catkin", "share/objmap_msgs/package.xml",
+        "share/objmap_msgs/msg/MapChange.msg", "share/objmap_msgs/srv/IsFree.srv",
+        "lib/python3/dist-packages/objmap_msgs/srv/_IsFree.py",
+        "lib/python3/dist-packages/objmap_msgs/msg/_MapChange.py"}) {
     EXPECT_TRUE(fs::exists(Prefix() / file)) << file;
   }
   const TempFolder elsewhere("install_ros");
   const std::string in_bare_shell =
-      "cd '" + elsewhere.path().string() + "' && env -i HOME=\"$HOME\" PATH=/usr/bin:/bin bash -c \"source '" +
+      "cd '" + elsewhere.path().string() +
+      "' && env -i HOME=\"$HOME\" PATH=/usr/bin:/bin bash -c \"source '" +
       (Prefix() / "setup.bash").string() + "' && ";
-  const testing::CommandResult python = RunCommand(
-      in_bare_shell +
-      "/usr/bin/python3 -c 'from objmap_msgs.srv import IsFree; print(IsFree._type)'\"");
+  const testing::CommandResult python =
+      RunCommand(in_bare_shell +
+                 "/usr/bin/python3 -c 'from objmap_msgs.srv import IsFree; print(IsFree._type)'\"");
   EXPECT_EQ(python.exit_code, 0) << python.output;
   EXPECT_NE(python.output.find("objmap_msgs/IsFree"), std::string::npos) << python.output;
   const testing::CommandResult tools =
@@ -196,8 +197,7 @@ TEST_F(Install, SourcingTheInstalledSetupBashPutsObjmapOnTheRosPaths) {
   const testing::CommandResult definition =
       RunCommand(in_bare_shell + "rossrv show objmap_msgs/IsFree\"");
   EXPECT_EQ(definition.exit_code, 0) << definition.output;
-  EXPECT_NE(definition.output.find("bool unknown_is_free"), std::string::npos)
-      << definition.output;
+  EXPECT_NE(definition.output.find("bool unknown_is_free"), std::string::npos) << definition.output;
   const testing::CommandResult launch =
       RunCommand(in_bare_shell + "roslaunch --nodes objmap objmap.launch rviz:=true\"");
   EXPECT_EQ(launch.exit_code, 0) << launch.output;

@@ -103,9 +103,9 @@ class RosTools : public ::testing::Test {
     // The tools are Debian's python3-rosservice, python3-rostopic, python3-rosmsg and rospy; a
     // machine without them skips. objmap_msgs for Python is objmap's own build: its absence is
     // a failure, checked in the first case.
-    const CommandResult tools = RunCommand(
-        InRosShell("command -v rosservice rostopic rosmsg rossrv roslaunch && "
-                   "/usr/bin/python3 -c 'import rospy'"));
+    const CommandResult tools =
+        RunCommand(InRosShell("command -v rosservice rostopic rosmsg rossrv roslaunch && "
+                              "/usr/bin/python3 -c 'import rospy'"));
     if (tools.exit_code != 0) {
       s.skip_reason =
           "SKIPPED: needs the ROS Python tools (rosservice, rostopic, rosmsg, roslaunch, rospy: "
@@ -130,10 +130,9 @@ class RosTools : public ::testing::Test {
     ros::start();
 
     s.node = std::make_unique<ChildProcess>(
-        std::vector<std::string>{OBJMAP_NODE_PATH, "__name:=objmap_node",
-                                 "_database:=" + (s.dir / "node.db").string(),
-                                 "_detector/model_path:=" + kModelPath,
-                                 "_sync_max_interval_s:=0.0"},
+        std::vector<std::string>{
+            OBJMAP_NODE_PATH, "__name:=objmap_node", "_database:=" + (s.dir / "node.db").string(),
+            "_detector/model_path:=" + kModelPath, "_sync_max_interval_s:=0.0"},
         (s.dir / "node.log").string());
     if (!s.node->Start(why)) return false;
     if (!ros::service::waitForService(std::string(kNode) + "/status", ros::Duration(300))) {
@@ -160,8 +159,8 @@ class RosTools : public ::testing::Test {
     if (!player.Start(why)) return false;
     const int played = player.WaitForExit(std::chrono::seconds(900));
     if (played != 0) {
-      *why = "objmap_dataset_player exited with " + std::to_string(played) + ":\n" +
-             player.Log() + "\nnode:\n" + s.node->Log();
+      *why = "objmap_dataset_player exited with " + std::to_string(played) + ":\n" + player.Log() +
+             "\nnode:\n" + s.node->Log();
       return false;
     }
     // Every keyframe mapped before the tools ask.
@@ -174,8 +173,7 @@ class RosTools : public ::testing::Test {
         break;
       }
       if (std::chrono::steady_clock::now() > deadline) {
-        *why = "objmap_node did not map the played keyframes in time; its log:\n" +
-               s.node->Log();
+        *why = "objmap_node did not map the played keyframes in time; its log:\n" + s.node->Log();
         return false;
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
@@ -286,8 +284,8 @@ TEST_F(RosTools, RosserviceCallQueryObjectsByClassPrintsThoseObjects) {
   for (const auto& object : Objects(class_name)) expected_ids.insert(std::to_string(object.id));
   ASSERT_FALSE(expected_ids.empty());
 
-  const CommandResult call = RunRosTool("rosservice call /objmap_node/query_objects \"{class_name: " +
-                                        class_name + "}\"");
+  const CommandResult call =
+      RunRosTool("rosservice call /objmap_node/query_objects \"{class_name: " + class_name + "}\"");
   ASSERT_EQ(call.exit_code, 0) << call.output;
   // Objects are list items at four spaces; their scores' ids are deeper.
   const std::vector<std::string> ids = AllMatches(call.output, R"re(\n    id: (\d+)\n)re");
@@ -342,8 +340,7 @@ TEST_F(RosTools, TheRospyExampleClientQueriesByClassAndAsksIsFree) {
   const std::vector<objmap_msgs::Object> objects = Objects(class_name);
   ASSERT_FALSE(objects.empty());
 
-  const std::string example =
-      std::string(OBJMAP_SOURCE_DIR) + "/docs/examples/ros_client.py";
+  const std::string example = std::string(OBJMAP_SOURCE_DIR) + "/docs/examples/ros_client.py";
   const CommandResult run =
       RunRosTool("/usr/bin/python3 " + ShellQuote(example) + " --class " + ShellQuote(class_name));
   ASSERT_EQ(run.exit_code, 0) << run.output;
@@ -359,21 +356,19 @@ TEST_F(RosTools, TheRospyExampleClientQueriesByClassAndAsksIsFree) {
   ASSERT_TRUE(ros::service::call(std::string(kNode) + "/is_free", is_free));
   ASSERT_TRUE(is_free.response.ok) << is_free.response.error;
   ASSERT_FALSE(is_free.response.free);
-  EXPECT_NE(run.output.find(": not free (" + std::to_string(is_free.response.occupied) +
-                            " occupied"),
-            std::string::npos)
+  EXPECT_NE(
+      run.output.find(": not free (" + std::to_string(is_free.response.occupied) + " occupied"),
+      std::string::npos)
       << run.output;
-  const std::string named = AllMatches(run.output, R"re(objects: ([0-9 ]+)\))re").empty()
-                                ? ""
-                                : AllMatches(run.output, R"re(objects: ([0-9 ]+)\))re")[0];
-  EXPECT_NE((" " + named + " ").find(" " + std::to_string(objects[0].id) + " "),
+  const std::vector<std::string> named = AllMatches(run.output, R"re(objects: ([0-9 ]+)\))re");
+  ASSERT_EQ(named.size(), 1u) << run.output;
+  EXPECT_NE((" " + named[0] + " ").find(" " + std::to_string(objects[0].id) + " "),
             std::string::npos)
       << run.output;
 
   // A box given on the command line; a reversed one is refused with the node's reason.
-  const CommandResult refused = RunRosTool("/usr/bin/python3 " + ShellQuote(example) +
-                                           " --class " + ShellQuote(class_name) +
-                                           " --box 0 0 0 -1 1 1");
+  const CommandResult refused = RunRosTool("/usr/bin/python3 " + ShellQuote(example) + " --class " +
+                                           ShellQuote(class_name) + " --box 0 0 0 -1 1 1");
   EXPECT_EQ(refused.exit_code, 1) << refused.output;
   EXPECT_NE(refused.output.find("is_free refused: region.min.x"), std::string::npos)
       << refused.output;
@@ -387,8 +382,7 @@ TEST_F(RosTools, TheRvizConfigurationShowsTopicsTheNodePublishes) {
   std::map<std::string, std::string> published;
   for (const auto& topic : topics) published[topic.name] = topic.datatype;
 
-  const YAML::Node config =
-      YAML::LoadFile(std::string(OBJMAP_SOURCE_DIR) + "/launch/objmap.rviz");
+  const YAML::Node config = YAML::LoadFile(std::string(OBJMAP_SOURCE_DIR) + "/launch/objmap.rviz");
   const YAML::Node manager = config["Visualization Manager"];
   EXPECT_EQ(manager["Global Options"]["Fixed Frame"].as<std::string>(), "map");
   const std::map<std::string, std::string> type_of_display = {
@@ -408,8 +402,8 @@ TEST_F(RosTools, TheRvizConfigurationShowsTopicsTheNodePublishes) {
     EXPECT_EQ(published[name], type_of_display.at(display_class)) << name;
   }
   EXPECT_TRUE(shows_tf);
-  for (const char* topic : {"/objmap_node/objects", "/objmap_node/occupied_cells",
-                            "/objmap_node/object_cloud"}) {
+  for (const char* topic :
+       {"/objmap_node/objects", "/objmap_node/occupied_cells", "/objmap_node/object_cloud"}) {
     EXPECT_EQ(shown.count(topic), 1u) << topic << " has no display";
   }
 
@@ -430,13 +424,15 @@ TEST_F(RosTools, TheRvizConfigurationShowsTopicsTheNodePublishes) {
         ShellQuote("import sys, roslaunch.config\n"
                    "sys.argv = ['load', 'rviz:=true', 'dataset:=/tmp', 'world_frame:=odom', "
                    "'node_name:=other']\n"
-                   "config = roslaunch.config.load_config_default(['" + path + "'], None)\n"
+                   "config = roslaunch.config.load_config_default(['" +
+                   path +
+                   "'], None)\n"
                    "for node in config.nodes:\n"
                    "    if node.package == 'rviz': print(node.args, node.remap_args)\n"));
     ASSERT_EQ(loaded.exit_code, 0) << launch << ": " << loaded.output;
-    EXPECT_NE(loaded.output.find("-d " + std::string(OBJMAP_SOURCE_DIR) +
-                                 "/launch/objmap.rviz -f odom"),
-              std::string::npos)
+    EXPECT_NE(
+        loaded.output.find("-d " + std::string(OBJMAP_SOURCE_DIR) + "/launch/objmap.rviz -f odom"),
+        std::string::npos)
         << launch << ": " << loaded.output;
     const std::string node_name = std::string(launch) == "objmap_dataset.launch"
                                       ? "objmap_node"  // the dataset launch names its node
