@@ -101,17 +101,6 @@ std::vector<Detection> DecodeCenterNet(const float* heatmap_chw, const float* bo
   return kept;
 }
 
-float BoxIoU(const BoundingBox2D& a, const BoundingBox2D& b) {
-  BoundingBox2D overlap;
-  overlap.x_min = std::max(a.x_min, b.x_min);
-  overlap.y_min = std::max(a.y_min, b.y_min);
-  overlap.x_max = std::min(a.x_max, b.x_max);
-  overlap.y_max = std::min(a.y_max, b.y_max);
-  const float intersection = overlap.Area();
-  const float united = a.Area() + b.Area() - intersection;
-  return united > 0.f ? intersection / united : 0.f;
-}
-
 std::vector<Detection> ClassWiseNms(std::vector<Detection> detections, float iou_threshold) {
   std::stable_sort(detections.begin(), detections.end(), ByScore);
   std::vector<Detection> kept;

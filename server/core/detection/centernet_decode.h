@@ -42,9 +42,6 @@ struct CenterNetDecodeParams {
 [[nodiscard]] std::vector<Detection> DecodeCenterNet(const float* heatmap_chw, const float* box_chw,
                                                      const CenterNetDecodeParams& params);
 
-/// Intersection over union of two boxes; 0 when either is empty.
-[[nodiscard]] float BoxIoU(const BoundingBox2D& a, const BoundingBox2D& b);
-
 /// Greedy class-wise non-maximum suppression: walks detections by descending score and drops
 /// each one that overlaps a kept detection of the same class by more than `iou_threshold`.
 [[nodiscard]] std::vector<Detection> ClassWiseNms(std::vector<Detection> detections,

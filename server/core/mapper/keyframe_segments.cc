@@ -343,14 +343,6 @@ float ClaimedFraction(const std::vector<int>& pixels, const PixelClaim& claimed)
   return static_cast<float>(hits) / static_cast<float>(pixels.size());
 }
 
-float BoxIou(const BoundingBox2D& a, const BoundingBox2D& b) {
-  const float w = std::min(a.x_max, b.x_max) - std::max(a.x_min, b.x_min);
-  const float h = std::min(a.y_max, b.y_max) - std::max(a.y_min, b.y_min);
-  if (w <= 0.f || h <= 0.f) return 0.f;
-  const float intersection = w * h;
-  return intersection / (a.Area() + b.Area() - intersection);
-}
-
 // How far (u, v) lies from the box centre, in half-extents (< 1 inside the box).
 float BoxDistance(const BoundingBox2D& box, int u, int v) {
   const float half_w = std::max(0.5f, 0.5f * box.Width());
@@ -443,7 +435,7 @@ std::vector<SegmentedDetection> SegmentDetections(
       }
       handled = true;
       if (earlier.class_scores.front().first == detection.class_id &&
-          BoxIou(depth_boxes[k], box) < config.split_max_box_iou) {
+          BoxIoU(depth_boxes[k], box) < config.split_max_box_iou) {
         std::vector<int> joined = segmented[k].pixels;
         for (int i : pixels) {
           if (!claimed[k].Has(i)) joined.push_back(i);

@@ -1,5 +1,7 @@
 #pragma once
 
+#include <algorithm>
+
 namespace objmap {
 
 /// Axis-aligned box in pixel coordinates (x right, y down), inclusive of x_min/y_min.
@@ -15,6 +17,15 @@ struct BoundingBox2D {
     return Width() > 0.f && Height() > 0.f ? Width() * Height() : 0.f;
   }
 };
+
+/// Intersection over union of two boxes; 0 when either is empty.
+[[nodiscard]] inline float BoxIoU(const BoundingBox2D& a, const BoundingBox2D& b) {
+  const BoundingBox2D overlap{std::max(a.x_min, b.x_min), std::max(a.y_min, b.y_min),
+                              std::min(a.x_max, b.x_max), std::min(a.y_max, b.y_max)};
+  const float intersection = overlap.Area();
+  const float united = a.Area() + b.Area() - intersection;
+  return united > 0.f ? intersection / united : 0.f;
+}
 
 /// One object detection on a colour image.
 struct Detection {
