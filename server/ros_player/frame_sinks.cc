@@ -59,6 +59,7 @@ class TopicSink : public FrameSink {
  public:
   TopicSink(ros::NodeHandle& node, const PlayerConfig& config)
       : config_(config),
+        node_(node),
         color_(node.advertise<sensor_msgs::Image>(kColorTopic, 5)),
         depth_(node.advertise<sensor_msgs::Image>(kDepthTopic, 5)),
         camera_info_(node.advertise<sensor_msgs::CameraInfo>(kCameraInfoTopic, 5)),
@@ -110,14 +111,28 @@ class TopicSink : public FrameSink {
   }
 
  private:
+  // Polled every 10 ms while a frame is being mapped: over one persistent connection, since a
+  // new TCP connection per call piles up thousands of sockets in TIME_WAIT over a sequence, and
+  // a busy machine then refuses one now and then. A failed call is retried on a new connection
+  // a few times before the node counts as gone.
   bool NodeFramesReceived(std::int64_t* count, std::string* why) {
+    constexpr int kAttempts = 5;
     objmap_msgs::Status status;
-    if (!ros::service::call(config_.wait_for_node, status)) {
-      *why = "~wait_for_node: calling " + config_.wait_for_node + " failed";
-      return false;
+    for (int attempt = 0; attempt < kAttempts; ++attempt) {
+      if (!status_client_.isValid()) {
+        status_client_ = node_.serviceClient<objmap_msgs::Status>(config_.wait_for_node,
+                                                                  /*persistent=*/true);
+      }
+      if (status_client_.call(status)) {
+        *count = status.response.frames_received;
+        return true;
+      }
+      status_client_.shutdown();
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
     }
-    *count = status.response.frames_received;
-    return true;
+    *why = "~wait_for_node: calling " + config_.wait_for_node + " failed " +
+           std::to_string(kAttempts) + " times";
+    return false;
   }
 
   template <typename Condition>
@@ -152,6 +167,8 @@ class TopicSink : public FrameSink {
   }
 
   const PlayerConfig& config_;
+  ros::NodeHandle node_;
+  ros::ServiceClient status_client_;
   ros::Publisher color_, depth_, camera_info_, tf_;
   ros::WallRate rate_;
   std::int64_t frames_received_at_start_ = 0;

@@ -159,8 +159,12 @@ class RosTools : public ::testing::Test {
     if (!player.Start(why)) return false;
     const int played = player.WaitForExit(std::chrono::seconds(900));
     if (played != 0) {
-      *why = "objmap_dataset_player exited with " + std::to_string(played) + ":\n" + player.Log() +
-             "\nnode:\n" + s.node->Log();
+      const int node_exit = s.node->WaitForExit(std::chrono::milliseconds(0));
+      *why =
+          "objmap_dataset_player exited with " + std::to_string(played) + ":\n" + player.Log() +
+          "\nobjmap_node " +
+          (node_exit < 0 ? std::string("still runs") : "exited with " + std::to_string(node_exit)) +
+          "; its log:\n" + s.node->Log();
       return false;
     }
     // Every keyframe mapped before the tools ask.
