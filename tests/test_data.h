@@ -13,6 +13,17 @@ inline std::string SharedDataPath(const std::string& relative) {
 
 inline bool Exists(const std::string& path) { return std::filesystem::exists(path); }
 
+/// Why a suite that maps `dataset_path` with the detector at `model_path` cannot run on this
+/// machine ("SKIPPED: needs ..."), or empty when both are there.
+inline std::string DatasetAndModelSkipReason(const std::string& dataset_path,
+                                             const std::string& model_path) {
+  if (!Exists(dataset_path)) return "SKIPPED: needs " + dataset_path + " (absent on this machine)";
+  if (!Exists(model_path)) {
+    return "SKIPPED: needs the detector model " + model_path + " (bash scripts/fetch_model.sh)";
+  }
+  return "";
+}
+
 }  // namespace objmap::testing
 
 #define OBJMAP_REQUIRE_PATH(path)                                                     \

@@ -111,10 +111,10 @@ class TopicSink : public FrameSink {
   }
 
  private:
-  // Polled every 10 ms while a frame is being mapped: over one persistent connection, since a
-  // new TCP connection per call piles up thousands of sockets in TIME_WAIT over a sequence, and
-  // a busy machine then refuses one now and then. A failed call is retried on a new connection
-  // a few times before the node counts as gone.
+  // Polled every 10 ms while a frame is being mapped, so over one persistent connection rather
+  // than a new TCP connection (and a socket left in TIME_WAIT) per call. One failed call does
+  // not end the play: it is retried on a new connection a few times before the node counts as
+  // gone.
   bool NodeFramesReceived(std::int64_t* count, std::string* why) {
     constexpr int kAttempts = 5;
     objmap_msgs::Status status;

@@ -92,15 +92,8 @@ class RosNode : public ::testing::Test {
   static void SetUpTestSuite() {
     Shared& s = shared();
     const std::string dataset = testing::SharedDataPath("redkitchen");
-    if (!testing::Exists(dataset)) {
-      s.skip_reason = "SKIPPED: needs " + dataset + " (absent on this machine)";
-      return;
-    }
-    if (!testing::Exists(kModelPath)) {
-      s.skip_reason =
-          "SKIPPED: needs the detector model " + kModelPath + " (bash scripts/fetch_model.sh)";
-      return;
-    }
+    s.skip_reason = testing::DatasetAndModelSkipReason(dataset, kModelPath);
+    if (!s.skip_reason.empty()) return;
     s.dir = fs::temp_directory_path() / ("objmap_ros_node_" + std::to_string(getpid()));
     fs::remove_all(s.dir);
     fs::create_directories(s.dir);

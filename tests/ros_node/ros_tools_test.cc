@@ -91,15 +91,8 @@ class RosTools : public ::testing::Test {
   static void SetUpTestSuite() {
     Shared& s = shared();
     const std::string dataset = testing::SharedDataPath("redkitchen");
-    if (!testing::Exists(dataset)) {
-      s.skip_reason = "SKIPPED: needs " + dataset + " (absent on this machine)";
-      return;
-    }
-    if (!testing::Exists(kModelPath)) {
-      s.skip_reason =
-          "SKIPPED: needs the detector model " + kModelPath + " (bash scripts/fetch_model.sh)";
-      return;
-    }
+    s.skip_reason = testing::DatasetAndModelSkipReason(dataset, kModelPath);
+    if (!s.skip_reason.empty()) return;
     // The tools are Debian's python3-rosservice, python3-rostopic, python3-rosmsg and rospy; a
     // machine without them skips. objmap_msgs for Python is objmap's own build: its absence is
     // a failure, checked in the first case.
