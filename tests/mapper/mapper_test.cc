@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -460,6 +461,66 @@ TEST_F(MapperScene, TouchingSameClassObjectsShareTheirSegmentAndStayTwo) {
   std::size_t observations = 0;
   for (const MapObject* cup : cups) observations += cup->observations.size();
   EXPECT_EQ(observations, 4u) << "the two oblique views each saw one thing where the mugs are";
+}
+
+// Three books of one footprint stacked on the table are one convex segment in every view, and
+// their boxes overlap too much to share it out by box. Cut by height above the table, each box
+// takes its own layer: three books, each model within its own book's height.
+TEST_F(MapperScene, StackedBooksAreCutByHeightAndStayThree) {
+  const int kBook = CocoClassId("book");
+  const std::array<double, 4> tops = {0.70, 0.74, 0.765, 0.785};  // table, then each book's top
+  boxes_.erase(boxes_.begin() + 1, boxes_.begin() + 3);           // no cups
+  for (int b = 0; b < 3; ++b) {
+    boxes_.push_back({{-0.08, -0.11, tops[b]}, {0.08, 0.11, tops[b + 1]}, {90, 60, 40}});
+  }
+  auto map_with = [&](const std::vector<int>& stack_classes, std::vector<const MapObject*>* books) {
+    MapperConfig config;
+    config.stack_classes = stack_classes;
+    auto mapper = std::make_unique<Mapper>(config);
+    for (int view = 0; view < 3; ++view) {
+      std::vector<Detection> detections;
+      for (int b = 0; b < 3; ++b) {
+        detections.push_back({Project(boxes_[2 + b], Pose(view)), kBook, 0.7f - 0.1f * b});
+      }
+      KeyframeResult result;
+      std::string why;
+      EXPECT_TRUE(mapper->AddKeyframe(Frame(view), detections, &result, &why)) << why;
+    }
+    books->clear();
+    for (const auto& [id, object] : mapper->objects().objects()) {
+      if (object.Label() == kBook) books->push_back(&object);
+    }
+    std::sort(books->begin(), books->end(), [](const MapObject* a, const MapObject* b) {
+      return a->centroid_W.z() < b->centroid_W.z();
+    });
+    return mapper;
+  };
+  std::vector<const MapObject*> books;
+  const auto cut = map_with(MapperConfig{}.stack_classes, &books);
+  ASSERT_EQ(books.size(), 3u);
+  for (int b = 0; b < 3; ++b) {
+    SCOPED_TRACE("book " + std::to_string(b));
+    EXPECT_EQ(books[b]->observations.size(), 3u);
+    // Within a centimetre of its own layer (points on the cut may go either way).
+    EXPECT_GT(books[b]->min_W.z(), tops[b] - 0.01);
+    EXPECT_LT(books[b]->max_W.z(), tops[b + 1] + 0.01);
+    // Over the stack's footprint (the lower books show only their fronts to these views).
+    EXPECT_GT(books[b]->min_W.x(), -0.09);
+    EXPECT_LT(books[b]->max_W.x(), 0.09);
+    EXPECT_NEAR(books[b]->centroid_W.y(), 0.0, 0.02);
+  }
+
+  // Without the cut, the stack's views each see one thing, or things spanning the stack.
+  const auto uncut = map_with({}, &books);
+  bool layered = books.size() == 3u;
+  for (const MapObject* book : books) layered = layered && book->max_W.z() - book->min_W.z() < 0.05;
+  EXPECT_FALSE(layered);
+
+  MapperConfig bad;
+  bad.min_stack_layer_gap_m = 0.f;
+  std::string why;
+  EXPECT_FALSE(bad.IsValid(&why));
+  EXPECT_NE(why.find("min_stack_layer_gap_m"), std::string::npos) << why;
 }
 
 // A box bounds what it shows: a segment spanning a small part of its box is a fragment (a handle,

@@ -18,6 +18,8 @@ void VisitMapper(MapperConfig* m, Visitor& v) {
   v("flat_classes", &m->flat_classes);
   v("flat_box_shrink_fraction", &m->flat_box_shrink_fraction);
   v("split_max_box_iou", &m->split_max_box_iou);
+  v("stack_classes", &m->stack_classes);
+  v("min_stack_layer_gap_m", &m->min_stack_layer_gap_m);
   v("min_segment_box_fill", &m->min_segment_box_fill);
   SegmenterConfig& s = m->segmenter;
   v.Section("segmenter");

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <numeric>
 
 #include "segmentation/segment_index.h"
@@ -375,6 +376,149 @@ void AddClassScore(ObjectObservation* observation, int class_id, float score) {
   observation->class_scores.emplace_back(class_id, score);
 }
 
+// The up direction, camera frame, where `box` stands: the normal of the up-facing supporting
+// plane with most pixels around the box (what holds an object up shows around and below it,
+// and often inside its box), and the plane's height along it. False when no up-facing plane is
+// in sight there.
+bool SupportUpNear(const SegmentationResult& segmentation, const OrganizedCloud& cloud_C,
+                   const SegmentIndex& index, const BoundingBox2D& box, Eigen::Vector3d* up,
+                   float* height) {
+  const float du = 0.5f * box.Width(), dv = box.Height();
+  const int u0 = std::max(0, static_cast<int>(box.x_min - du));
+  const int v0 = std::max(0, static_cast<int>(box.y_min - dv));
+  const int u1 = std::min(segmentation.width - 1, static_cast<int>(box.x_max + du));
+  const int v1 = std::min(segmentation.height - 1, static_cast<int>(box.y_max + dv));
+  std::vector<std::pair<int, int>> planes;  // (pixels around the box, segment)
+  {
+    std::vector<int> count(segmentation.num_segments, 0);
+    for (int v = v0; v <= v1; ++v) {
+      for (int u = u0; u <= u1; ++u) {
+        const int label = segmentation.labels[v * segmentation.width + u];
+        if (label >= 0 && segmentation.segment_is_plane[label]) ++count[label];
+      }
+    }
+    for (int s = 0; s < segmentation.num_segments; ++s) {
+      if (count[s] > 0) planes.emplace_back(count[s], s);
+    }
+  }
+  std::sort(planes.rbegin(), planes.rend());
+  for (const auto& [pixels, s] : planes) {
+    PlaneFit fit;
+    if (FitPlane(cloud_C, index, s, &fit) && fit.UpFacing() > kMinUpFacing) {
+      *up = fit.normal;
+      *height = static_cast<float>(fit.normal.dot(fit.centre));
+      return true;
+    }
+  }
+  return false;
+}
+
+// A box's own pixels (in no other box of the stack) that place it by their median height.
+constexpr std::size_t kMinOwnPixels = 20;
+// Points less than this above the supporting plane are the plane's (its depth noise at 2-3 m),
+// not the stack's lowest layer.
+constexpr float kAboveSupportM = 0.005f;
+
+// A stack's boxes with the pixels of its segment that their detections picked.
+struct StackGroup {
+  std::vector<BoundingBox2D> boxes;  // depth pixels; the first is the group's first entry's
+  std::vector<BoundingBox2D> detection_boxes;  // the same, as detected (colour pixels)
+  std::vector<float> scores;
+  std::vector<int> pixels;  // union over the boxes, each pixel once
+};
+
+// One layer of a stack per distinct box: the pixels at its height, with the box and score of
+// the detections it stands for (ascending height). Empty when the stack cannot be cut: no
+// up-facing support in sight, or every box at one height (one object boxed several times).
+struct StackLayer {
+  std::vector<int> pixels;
+  std::vector<int> boxes;  // indices into StackGroup::boxes
+};
+std::vector<StackLayer> CutStack(const SegmentationResult& segmentation,
+                                 const OrganizedCloud& cloud_C, const SegmentIndex& index,
+                                 const StackGroup& group, float min_layer_gap_m) {
+  std::vector<StackLayer> layers;
+  BoundingBox2D all = group.boxes.front();
+  for (const BoundingBox2D& b : group.boxes) {
+    all = {std::min(all.x_min, b.x_min), std::min(all.y_min, b.y_min), std::max(all.x_max, b.x_max),
+           std::max(all.y_max, b.y_max)};
+  }
+  Eigen::Vector3d up;
+  float support_height = 0.f;
+  if (!SupportUpNear(segmentation, cloud_C, index, all, &up, &support_height)) return layers;
+  const int width = segmentation.width;
+  const Eigen::Vector3f up_f = up.cast<float>();
+  // Each box's height: the median over the pixels only it covers (a lower book's side strip,
+  // the top book's cover), robust to a few pixels of jitter in boxes a few pixels high. A box
+  // with too few of its own (the middle of three, covered by the boxes above and below it)
+  // lies between its neighbours in the image, lower in the image being lower in the stack.
+  const std::size_t count = group.boxes.size();
+  std::vector<float> own_median(count, std::numeric_limits<float>::quiet_NaN());
+  std::vector<float> inside_median(count, std::numeric_limits<float>::quiet_NaN());
+  auto median = [](std::vector<float>* values) {
+    std::nth_element(values->begin(), values->begin() + values->size() / 2, values->end());
+    return (*values)[values->size() / 2];
+  };
+  for (std::size_t b = 0; b < count; ++b) {
+    std::vector<float> own, inside;
+    for (int i : group.pixels) {
+      const int v = i / width, u = i - v * width;
+      if (!cloud_C.IsValid(i) || !Inside(group.boxes[b], u, v)) continue;
+      const float h = up_f.dot(cloud_C.points_C[i]);
+      if (h < support_height + kAboveSupportM) continue;
+      inside.push_back(h);
+      bool shared = false;
+      for (std::size_t o = 0; o < count && !shared; ++o) {
+        shared = o != b && Inside(group.boxes[o], u, v);
+      }
+      if (!shared) own.push_back(h);
+    }
+    if (own.size() >= kMinOwnPixels) own_median[b] = median(&own);
+    if (!inside.empty()) inside_median[b] = median(&inside);
+  }
+  std::vector<int> image_order(count);  // lowest in the image first
+  std::iota(image_order.begin(), image_order.end(), 0);
+  std::sort(image_order.begin(), image_order.end(), [&](int a, int b) {
+    return group.boxes[a].y_min + group.boxes[a].y_max >
+           group.boxes[b].y_min + group.boxes[b].y_max;
+  });
+  std::vector<std::pair<float, int>> box_heights;
+  for (std::size_t k = 0; k < count; ++k) {
+    const int b = image_order[k];
+    float height = own_median[b];
+    if (std::isnan(height)) {
+      float below = std::numeric_limits<float>::quiet_NaN(), above = below;
+      for (std::size_t n = k; n-- > 0 && std::isnan(below);) below = own_median[image_order[n]];
+      for (std::size_t n = k + 1; n < count && std::isnan(above); ++n) {
+        above = own_median[image_order[n]];
+      }
+      height = !std::isnan(below) && !std::isnan(above) ? 0.5f * (below + above) : inside_median[b];
+    }
+    if (!std::isnan(height)) box_heights.emplace_back(height, b);
+  }
+  std::sort(box_heights.begin(), box_heights.end());
+  std::vector<float> layer_height;
+  for (const auto& [h, b] : box_heights) {
+    if (layer_height.empty() || h - layer_height.back() >= min_layer_gap_m) {
+      layer_height.push_back(h);
+      layers.emplace_back();
+    }
+    layers.back().boxes.push_back(b);
+  }
+  if (layers.size() < 2) return {};
+  // Each pixel goes to the layer whose height it lies nearest: the cuts halfway between layers.
+  // The support itself (the desk around the stack's foot) is no layer's.
+  for (int i : group.pixels) {
+    if (!cloud_C.IsValid(i)) continue;
+    const float h = up_f.dot(cloud_C.points_C[i]);
+    if (h < support_height + kAboveSupportM) continue;
+    std::size_t l = 0;
+    while (l + 1 < layer_height.size() && h > 0.5f * (layer_height[l] + layer_height[l + 1])) ++l;
+    layers[l].pixels.push_back(i);
+  }
+  return layers;
+}
+
 }  // namespace
 
 BoundingBox2D ToDepthPixels(const BoundingBox2D& box, const ColorImage& color,
@@ -398,6 +542,18 @@ std::vector<SegmentedDetection> SegmentDetections(
   const std::size_t frame_pixels = segmentation.labels.size();
   std::vector<PixelClaim> claimed;
   std::vector<BoundingBox2D> depth_boxes;  // of each entry, in depth pixels
+  // Detections of a stack class that picked one segment: the entry each grew from (its root)
+  // and, per root, the group the stack is cut from once every detection has been seen.
+  std::vector<std::size_t> root_of;
+  std::map<std::size_t, StackGroup> stacks;
+  auto add_to_stack = [&](std::size_t root, const Detection& detection, const BoundingBox2D& box,
+                          const std::vector<int>& pixels) {
+    StackGroup& group = stacks[root];
+    group.boxes.push_back(box);
+    group.detection_boxes.push_back(detection.box);
+    group.scores.push_back(detection.score);
+    group.pixels.insert(group.pixels.end(), pixels.begin(), pixels.end());
+  };
   auto make_entry = [&](const Detection& detection, const std::vector<int>& pixels,
                         SegmentedDetection* entry) {
     entry->observation.segment_C =
@@ -434,8 +590,11 @@ std::vector<SegmentedDetection> SegmentDetections(
         continue;
       }
       handled = true;
-      if (earlier.class_scores.front().first == detection.class_id &&
-          BoxIoU(depth_boxes[k], box) < config.split_max_box_iou) {
+      const bool same_class = earlier.class_scores.front().first == detection.class_id;
+      if (same_class && stacks.count(root_of[k]) > 0) {
+        add_to_stack(root_of[k], detection, box, pixels);
+      }
+      if (same_class && BoxIoU(depth_boxes[k], box) < config.split_max_box_iou) {
         std::vector<int> joined = segmented[k].pixels;
         for (int i : pixels) {
           if (!claimed[k].Has(i)) joined.push_back(i);
@@ -450,6 +609,7 @@ std::vector<SegmentedDetection> SegmentDetections(
           claimed[k] = PixelClaim(pixels_k, frame_pixels);
           claimed.emplace_back(pixels_d, frame_pixels);
           depth_boxes.push_back(box);
+          root_of.push_back(root_of[k]);
           segmented.push_back(std::move(added));
           continue;
         }
@@ -461,9 +621,52 @@ std::vector<SegmentedDetection> SegmentDetections(
     if (!make_entry(detection, pixels, &entry)) continue;
     claimed.emplace_back(pixels, frame_pixels);
     depth_boxes.push_back(box);
+    root_of.push_back(segmented.size());
+    if (Contains(config.stack_classes, detection.class_id) && !is_top) {
+      add_to_stack(segmented.size(), detection, box, pixels);
+    }
     segmented.push_back(std::move(entry));
   }
-  return segmented;
+  // Stacks seen as one segment: each distinct box takes its layer, replacing whatever the
+  // split by box made of them.
+  std::vector<bool> replaced(segmented.size(), false);
+  std::vector<SegmentedDetection> layered;
+  for (auto& [root, group] : stacks) {
+    if (group.boxes.size() < 2) continue;
+    std::sort(group.pixels.begin(), group.pixels.end());
+    group.pixels.erase(std::unique(group.pixels.begin(), group.pixels.end()), group.pixels.end());
+    const std::vector<StackLayer> layers =
+        CutStack(segmentation, cloud_C, index, group, config.min_stack_layer_gap_m);
+    std::vector<SegmentedDetection> entries;
+    for (const StackLayer& layer : layers) {
+      // The layer speaks for its best-scoring box; the group's first box keeps what its entry
+      // gathered from other classes' detections of the same segment.
+      const int best = *std::max_element(layer.boxes.begin(), layer.boxes.end(), [&](int a, int b) {
+        return group.scores[a] < group.scores[b];
+      });
+      Detection detection;
+      detection.class_id = segmented[root].observation.class_scores.front().first;
+      detection.score = group.scores[best];
+      detection.box = group.detection_boxes[best];
+      SegmentedDetection entry;
+      if (!make_entry(detection, layer.pixels, &entry)) break;
+      if (std::find(layer.boxes.begin(), layer.boxes.end(), 0) != layer.boxes.end()) {
+        entry.observation.class_scores = segmented[root].observation.class_scores;
+      }
+      entries.push_back(std::move(entry));
+    }
+    if (entries.size() != layers.size() || layers.empty()) continue;  // kept as split by box
+    for (std::size_t e = 0; e < segmented.size(); ++e) {
+      if (root_of[e] == root) replaced[e] = true;
+    }
+    for (SegmentedDetection& entry : entries) layered.push_back(std::move(entry));
+  }
+  std::vector<SegmentedDetection> result;
+  for (std::size_t e = 0; e < segmented.size(); ++e) {
+    if (!replaced[e]) result.push_back(std::move(segmented[e]));
+  }
+  for (SegmentedDetection& entry : layered) result.push_back(std::move(entry));
+  return result;
 }
 
 }  // namespace objmap

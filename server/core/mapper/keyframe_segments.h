@@ -25,7 +25,9 @@ struct SegmentedDetection {
 /// claimed >= 50 % by an earlier (higher-scoring) detection adds the later detection's class score
 /// to that observation instead of becoming a second observation of the same thing. Exceptions:
 /// two same-class detections with distinct boxes (IoU below MapperConfig::split_max_box_iou)
-/// share the segment out by box, and nothing fuses into a surface-class (table) observation.
+/// share the segment out by box; detections of a stack class (MapperConfig::stack_classes) that
+/// pick one segment cut it by height above the supporting plane under it, one layer per box at a
+/// distinct height; and nothing fuses into a surface-class (table) observation.
 [[nodiscard]] std::vector<SegmentedDetection> SegmentDetections(
     const RgbdFrame& frame, const OrganizedCloud& cloud_C, const SegmentationResult& segmentation,
     const std::vector<Detection>& detections, KeyframeId keyframe_id, const MapperConfig& config);

@@ -195,6 +195,10 @@ bool MapperConfig::IsValid(std::string* why) const {
     *why = "MapperConfig.split_max_box_iou must be in [0, 1]";
     return false;
   }
+  if (!(min_stack_layer_gap_m > 0.f && min_stack_layer_gap_m < 1.f)) {
+    *why = "MapperConfig.min_stack_layer_gap_m must be in (0, 1) m";
+    return false;
+  }
   if (!(flat_box_shrink_fraction >= 0.f && flat_box_shrink_fraction < 0.5f)) {
     *why = "MapperConfig.flat_box_shrink_fraction must be in [0, 0.5)";
     return false;
@@ -268,9 +272,8 @@ const std::map<KeyframeId, ObjectVisibility>& Mapper::Impl::VisibilityOf(
                                        object.max_W + Eigen::Vector3f::Constant(0.02f));
     for (auto it = keyframes.upper_bound(cache.evaluated_through); it != keyframes.end(); ++it) {
       const KeyframeRecord& record = it->second;
-      const ObjectVisibility seen =
-          VisibilityIn(samples, bounds_W, record.T_W_C, record.intrinsics, record.depth_mm,
-                       config.inventory);
+      const ObjectVisibility seen = VisibilityIn(samples, bounds_W, record.T_W_C, record.intrinsics,
+                                                 record.depth_mm, config.inventory);
       if (seen.visible_fraction > 0.f) cache.seen[it->first] = seen;
     }
     cache.evaluated_through = keyframes.rbegin()->first;
@@ -389,9 +392,8 @@ void Mapper::Impl::Reassociate() {
 // keyframes it holds; false with the reason otherwise (the map is then untouched).
 bool Mapper::Impl::RestoreOccupancy(const OccupancyCheckpoint& checkpoint, int* integrated,
                                     std::string* why) {
-  const KeyframeId last = checkpoint.keyframe_poses.empty()
-                              ? 0
-                              : checkpoint.keyframe_poses.rbegin()->first;
+  const KeyframeId last =
+      checkpoint.keyframe_poses.empty() ? 0 : checkpoint.keyframe_poses.rbegin()->first;
   for (const auto& [id, record] : keyframes) {
     if (id > last) break;
     auto it = checkpoint.keyframe_poses.find(id);
@@ -587,17 +589,15 @@ RestoreOutcome Mapper::Restore(std::map<KeyframeId, KeyframeRecord> keyframes,
   impl_->keyframes = std::move(keyframes);
   impl_->reach_C.clear();
   impl_->visibility_cache.clear();
-  impl_->next_keyframe_id =
-      impl_->keyframes.empty() ? 1 : impl_->keyframes.rbegin()->first + 1;
+  impl_->next_keyframe_id = impl_->keyframes.empty() ? 1 : impl_->keyframes.rbegin()->first + 1;
   // Views come from the poses: the observations' stored views (if any) are replaced.
   impl_->RecomputeViews();
   for (auto& [id, list] : observations) AssignViews(impl_->view_of_keyframe, &list);
   impl_->objects.Restore(std::move(observations), next_object_id, impl_->PoseLookup());
   impl_->associator = Associator(impl_->config.association);  // caches of the old objects
   RestoreOutcome outcome;
-  if (checkpoint != nullptr &&
-      impl_->RestoreOccupancy(*checkpoint, &outcome.keyframes_integrated,
-                              &outcome.checkpoint_refused)) {
+  if (checkpoint != nullptr && impl_->RestoreOccupancy(*checkpoint, &outcome.keyframes_integrated,
+                                                       &outcome.checkpoint_refused)) {
     outcome.from_checkpoint = true;
     return outcome;
   }

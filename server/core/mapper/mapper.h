@@ -73,14 +73,22 @@ struct MapperConfig {
   /// part of the surface that dominates it. Books lying on a desk are as flat: seen from a few
   /// metres a stack of them joins the desk's segment. Phones and remotes are left out: their
   /// spurious detections (often on patches of a table) would outnumber them.
-  std::vector<int> flat_classes = {62 /* tv */,   63 /* laptop */,       66 /* keyboard */,
-                                   71 /* sink */, 74 /* clock */,        72 /* refrigerator */,
-                                   69 /* oven */, 73 /* book */};
+  std::vector<int> flat_classes = {
+      62 /* tv */,    63 /* laptop */,       66 /* keyboard */, 71 /* sink */,
+      74 /* clock */, 72 /* refrigerator */, 69 /* oven */,     73 /* book */};
   /// Two detections of one class whose boxes overlap by less than this IoU but pick the same
   /// segment (two cups touching, books in a stack: one convex segment) share it out between
   /// their boxes and stay two observations. 0: the later one only adds its score to the first
   /// (the paper's one segment, one object).
   float split_max_box_iou = 0.3f;
+  /// Detections of these COCO classes may lie stacked (books on a desk): when two or more of one
+  /// class pick one segment, their boxes overlap whatever the view, and a split by box cuts the
+  /// stack across its layers. The segment is cut by height above the supporting plane under it
+  /// instead: each box takes the layer at the median height of the pixels only it covers.
+  std::vector<int> stack_classes = {73 /* book */};
+  /// Boxes of a stack whose layers lie closer in height than this are one object boxed twice
+  /// (two boxes of one book); layers of a real stack lie at least a thin book's thickness apart.
+  float min_stack_layer_gap_m = 0.01f;
   /// Flat-object boxes shrink by this fraction of their size on every side before cropping the
   /// plane (colour and depth are not registered, so box borders are unreliable).
   float flat_box_shrink_fraction = 0.1f;
@@ -142,8 +150,8 @@ struct PoseUpdateReport {
 struct KeyframeRecord {
   Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
   CameraIntrinsics intrinsics;
-  std::vector<std::uint16_t> depth_mm;     ///< row-major, 0: no depth
-  std::vector<std::uint8_t> object_mask;   ///< row-major, 1: the pixel belongs to an object
+  std::vector<std::uint16_t> depth_mm;    ///< row-major, 0: no depth
+  std::vector<std::uint8_t> object_mask;  ///< row-major, 1: the pixel belongs to an object
 };
 
 /// A frame's depth as a keyframe keeps it (millimetres, 0 where there is none), no object pixels.
@@ -160,8 +168,8 @@ struct OccupancyCheckpoint {
 /// What Mapper::Restore did with the OctoMap.
 struct RestoreOutcome {
   bool from_checkpoint = false;
-  int keyframes_integrated = 0;     ///< keyframes whose rays were cast (those after the checkpoint)
-  std::string checkpoint_refused;   ///< why a given checkpoint was not used; empty otherwise
+  int keyframes_integrated = 0;    ///< keyframes whose rays were cast (those after the checkpoint)
+  std::string checkpoint_refused;  ///< why a given checkpoint was not used; empty otherwise
 };
 
 /// The facade of the core: keyframes in, objects and occupancy out (paper Fig. 3).
