@@ -413,6 +413,8 @@ bool SupportUpNear(const SegmentationResult& segmentation, const OrganizedCloud&
   return false;
 }
 
+// A layer's pixels reach this far beyond the heights its boxes' own pixels span (depth noise).
+constexpr float kLayerSpanMarginM = 0.005f;
 // A box's own pixels (in no other box of the stack) that place it by their median height.
 constexpr std::size_t kMinOwnPixels = 20;
 // Points less than this above the supporting plane are the plane's (its depth noise at 2-3 m),
@@ -454,6 +456,9 @@ std::vector<StackLayer> CutStack(const SegmentationResult& segmentation,
   // lies between its neighbours in the image, lower in the image being lower in the stack.
   const std::size_t count = group.boxes.size();
   std::vector<float> own_median(count, std::numeric_limits<float>::quiet_NaN());
+  // The heights a box's own pixels span (the middle 90 %): where its object certainly is.
+  std::vector<std::pair<float, float>> own_span(
+      count, {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::quiet_NaN()});
   std::vector<float> inside_median(count, std::numeric_limits<float>::quiet_NaN());
   auto median = [](std::vector<float>* values) {
     std::nth_element(values->begin(), values->begin() + values->size() / 2, values->end());
@@ -473,7 +478,11 @@ std::vector<StackLayer> CutStack(const SegmentationResult& segmentation,
       }
       if (!shared) own.push_back(h);
     }
-    if (own.size() >= kMinOwnPixels) own_median[b] = median(&own);
+    if (own.size() >= kMinOwnPixels) {
+      own_median[b] = median(&own);
+      std::sort(own.begin(), own.end());
+      own_span[b] = {own[own.size() / 20], own[own.size() - 1 - own.size() / 20]};
+    }
     if (!inside.empty()) inside_median[b] = median(&inside);
   }
   std::vector<int> image_order(count);  // lowest in the image first
@@ -505,6 +514,20 @@ std::vector<StackLayer> CutStack(const SegmentationResult& segmentation,
     }
     layers.back().boxes.push_back(b);
   }
+  // A layer reaches as far as its boxes' own pixels do. Between two layers' spans lies what no
+  // box claimed alone: a book of the stack the detector did not box in this view, which belongs
+  // to neither neighbour.
+  std::vector<float> layer_lo(layers.size(), std::numeric_limits<float>::lowest());
+  std::vector<float> layer_hi(layers.size(), std::numeric_limits<float>::max());
+  for (std::size_t l = 0; l < layers.size(); ++l) {
+    float lo = std::numeric_limits<float>::max(), hi = std::numeric_limits<float>::lowest();
+    for (int b : layers[l].boxes) {
+      if (std::isnan(own_span[b].first)) continue;
+      lo = std::min(lo, own_span[b].first);
+      hi = std::max(hi, own_span[b].second);
+    }
+    if (lo <= hi) layer_lo[l] = lo - kLayerSpanMarginM, layer_hi[l] = hi + kLayerSpanMarginM;
+  }
   if (layers.size() < 2) return {};
   // Each pixel goes to the layer whose height it lies nearest: the cuts halfway between layers.
   // The support itself (the desk around the stack's foot) is no layer's.
@@ -514,7 +537,7 @@ std::vector<StackLayer> CutStack(const SegmentationResult& segmentation,
     if (h < support_height + kAboveSupportM) continue;
     std::size_t l = 0;
     while (l + 1 < layer_height.size() && h > 0.5f * (layer_height[l] + layer_height[l + 1])) ++l;
-    layers[l].pixels.push_back(i);
+    if (h >= layer_lo[l] && h <= layer_hi[l]) layers[l].pixels.push_back(i);
   }
   return layers;
 }
