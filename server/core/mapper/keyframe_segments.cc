@@ -429,11 +429,9 @@ struct StackGroup {
   std::vector<int> pixels;  // union over the boxes, each pixel once
 };
 
-// One layer of a stack per distinct height of its boxes: the pixels at that height, with the
-// boxes it stands for (ascending height). One layer when every box lies at one height (a lone
-// box of a book in a stack, one object boxed twice, books side by side): the pixels within the
-// heights its boxes span, so a box's dilation does not take in the books above and below it.
-// Empty when no up-facing support is in sight.
+// One layer of a stack per distinct box: the pixels at its height, with the box and score of
+// the detections it stands for (ascending height). Empty when the stack cannot be cut: no
+// up-facing support in sight, or every box at one height (one object boxed several times).
 struct StackLayer {
   std::vector<int> pixels;
   std::vector<int> boxes;  // indices into StackGroup::boxes
@@ -530,7 +528,7 @@ std::vector<StackLayer> CutStack(const SegmentationResult& segmentation,
     }
     if (lo <= hi) layer_lo[l] = lo - kLayerSpanMarginM, layer_hi[l] = hi + kLayerSpanMarginM;
   }
-  if (layers.empty()) return {};
+  if (layers.size() < 2) return {};
   // Each pixel goes to the layer whose height it lies nearest: the cuts halfway between layers.
   // The support itself (the desk around the stack's foot) is no layer's.
   for (int i : group.pixels) {
@@ -653,18 +651,15 @@ std::vector<SegmentedDetection> SegmentDetections(
     segmented.push_back(std::move(entry));
   }
   // Stacks seen as one segment: each distinct box takes its layer, replacing whatever the
-  // split by box made of them; a box of a stack class alone keeps to the heights it spans.
-  // The layers take the place of the group's first entry.
+  // split by box made of them.
   std::vector<bool> replaced(segmented.size(), false);
-  std::map<std::size_t, std::vector<SegmentedDetection>> layered;
+  std::vector<SegmentedDetection> layered;
   for (auto& [root, group] : stacks) {
+    if (group.boxes.size() < 2) continue;
     std::sort(group.pixels.begin(), group.pixels.end());
     group.pixels.erase(std::unique(group.pixels.begin(), group.pixels.end()), group.pixels.end());
     const std::vector<StackLayer> layers =
         CutStack(segmentation, cloud_C, index, group, config.min_stack_layer_gap_m);
-    // Boxes side by side at one height (two books lying next to each other) keep their split
-    // by box.
-    if (layers.size() == 1 && group.boxes.size() > 1) continue;
     std::vector<SegmentedDetection> entries;
     for (const StackLayer& layer : layers) {
       // The layer speaks for its best-scoring box; the group's first box keeps what its entry
@@ -687,16 +682,13 @@ std::vector<SegmentedDetection> SegmentDetections(
     for (std::size_t e = 0; e < segmented.size(); ++e) {
       if (root_of[e] == root) replaced[e] = true;
     }
-    layered[root] = std::move(entries);
+    for (SegmentedDetection& entry : entries) layered.push_back(std::move(entry));
   }
   std::vector<SegmentedDetection> result;
   for (std::size_t e = 0; e < segmented.size(); ++e) {
-    if (!replaced[e]) {
-      result.push_back(std::move(segmented[e]));
-    } else if (auto it = layered.find(e); it != layered.end()) {
-      for (SegmentedDetection& entry : it->second) result.push_back(std::move(entry));
-    }
+    if (!replaced[e]) result.push_back(std::move(segmented[e]));
   }
+  for (SegmentedDetection& entry : layered) result.push_back(std::move(entry));
   return result;
 }
 
