@@ -449,7 +449,16 @@ std::vector<StackLayer> CutStack(const SegmentationResult& segmentation,
   float support_height = 0.f;
   if (!SupportUpNear(segmentation, cloud_C, index, all, &up, &support_height)) return layers;
   const int width = segmentation.width;
+  // Each pixel's height above the support, once; NaN for no depth and for the support itself
+  // (the desk around the stack's foot), which is no layer's.
   const Eigen::Vector3f up_f = up.cast<float>();
+  std::vector<float> height_of(group.pixels.size(), std::numeric_limits<float>::quiet_NaN());
+  for (std::size_t p = 0; p < group.pixels.size(); ++p) {
+    const int i = group.pixels[p];
+    if (!cloud_C.IsValid(i)) continue;
+    const float h = up_f.dot(cloud_C.points_C[i]);
+    if (h >= support_height + kAboveSupportM) height_of[p] = h;
+  }
   // Each box's height: the median over the pixels only it covers (a lower book's side strip,
   // the top book's cover), robust to a few pixels of jitter in boxes a few pixels high. A box
   // with too few of its own (the middle of three, covered by the boxes above and below it)
@@ -466,11 +475,10 @@ std::vector<StackLayer> CutStack(const SegmentationResult& segmentation,
   };
   for (std::size_t b = 0; b < count; ++b) {
     std::vector<float> own, inside;
-    for (int i : group.pixels) {
-      const int v = i / width, u = i - v * width;
-      if (!cloud_C.IsValid(i) || !Inside(group.boxes[b], u, v)) continue;
-      const float h = up_f.dot(cloud_C.points_C[i]);
-      if (h < support_height + kAboveSupportM) continue;
+    for (std::size_t p = 0; p < group.pixels.size(); ++p) {
+      const float h = height_of[p];
+      const int i = group.pixels[p], v = i / width, u = i - v * width;
+      if (std::isnan(h) || !Inside(group.boxes[b], u, v)) continue;
       inside.push_back(h);
       bool shared = false;
       for (std::size_t o = 0; o < count && !shared; ++o) {
@@ -514,6 +522,7 @@ std::vector<StackLayer> CutStack(const SegmentationResult& segmentation,
     }
     layers.back().boxes.push_back(b);
   }
+  if (layers.size() < 2) return {};
   // A layer reaches as far as its boxes' own pixels do. Between two layers' spans lies what no
   // box claimed alone: a book of the stack the detector did not box in this view, which belongs
   // to neither neighbour.
@@ -528,16 +537,13 @@ std::vector<StackLayer> CutStack(const SegmentationResult& segmentation,
     }
     if (lo <= hi) layer_lo[l] = lo - kLayerSpanMarginM, layer_hi[l] = hi + kLayerSpanMarginM;
   }
-  if (layers.size() < 2) return {};
   // Each pixel goes to the layer whose height it lies nearest: the cuts halfway between layers.
-  // The support itself (the desk around the stack's foot) is no layer's.
-  for (int i : group.pixels) {
-    if (!cloud_C.IsValid(i)) continue;
-    const float h = up_f.dot(cloud_C.points_C[i]);
-    if (h < support_height + kAboveSupportM) continue;
+  for (std::size_t p = 0; p < group.pixels.size(); ++p) {
+    const float h = height_of[p];
+    if (std::isnan(h)) continue;
     std::size_t l = 0;
     while (l + 1 < layer_height.size() && h > 0.5f * (layer_height[l] + layer_height[l + 1])) ++l;
-    if (h >= layer_lo[l] && h <= layer_hi[l]) layers[l].pixels.push_back(i);
+    if (h >= layer_lo[l] && h <= layer_hi[l]) layers[l].pixels.push_back(group.pixels[p]);
   }
   return layers;
 }
