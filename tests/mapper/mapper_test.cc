@@ -463,6 +463,59 @@ TEST_F(MapperScene, TouchingSameClassObjectsShareTheirSegmentAndStayTwo) {
   EXPECT_EQ(observations, 4u) << "the two oblique views each saw one thing where the mugs are";
 }
 
+// Two touching mugs, boxed together in three views and the first alone in three more: a box
+// alone takes a slice of its neighbour with it (its dilation, for unregistered colour and
+// depth). The first mug's published model gives that slice to the second, whose own views all
+// reached it.
+TEST_F(MapperScene, ATouchingMugSeenAloneDoesNotPublishItsNeighboursSide) {
+  boxes_[1] = {{-0.05, -0.10, 0.70}, {0.05, 0.0, 0.82}, {200, 30, 30}};
+  boxes_[2] = {{-0.05, 0.0, 0.70}, {0.05, 0.10, 0.82}, {200, 30, 30}};
+  eyes_.push_back({-0.9, -0.45, 1.3});
+  eyes_.push_back({-1.05, -0.1, 1.25});
+  eyes_.push_back({-0.85, 0.1, 1.4});
+  // Points of each mug's published model on the other mug and on its own.
+  auto points_on_neighbour = [&](bool resolve, std::array<int, 2>* on_other,
+                                 std::array<int, 2>* on_own) {
+    MapperConfig config;
+    config.objects.resolve_shared_voxels = resolve;
+    Mapper mapper{config};
+    for (int view = 0; view < 6; ++view) {
+      std::vector<Detection> detections = CupDetections(view);
+      if (view >= 3) detections.pop_back();  // the second mug is not boxed
+      KeyframeResult result;
+      std::string why;
+      ASSERT_TRUE(mapper.AddKeyframe(Frame(view), detections, &result, &why)) << why;
+    }
+    std::vector<const MapObject*> cups;
+    for (const auto& [id, object] : mapper.objects().objects()) {
+      if (object.Label() == kCup) cups.push_back(&object);
+    }
+    ASSERT_EQ(cups.size(), 2u);
+    // cups[0]: the first mug (y < 0).
+    if (cups[0]->centroid_W.y() > cups[1]->centroid_W.y()) std::swap(cups[0], cups[1]);
+    for (int k = 0; k < 2; ++k) {
+      const ColoredPoints model = mapper.objects().ModelPoints(*cups[k]);
+      (*on_other)[k] = (*on_own)[k] = 0;
+      for (const Eigen::Vector3f& p : model.points) {
+        // On the other mug: past the contact by more than the 5 mm voxel. Its own: more than
+        // a centimetre from the contact, where no voxel is in doubt.
+        const float beyond_contact = k == 0 ? p.y() : -p.y();
+        if (beyond_contact > 0.005f) ++(*on_other)[k];
+        if (beyond_contact < -0.01f) ++(*on_own)[k];
+      }
+    }
+  };
+  std::array<int, 2> on_other{}, on_own{}, on_other_kept{}, on_own_kept{};
+  points_on_neighbour(true, &on_other, &on_own);
+  points_on_neighbour(false, &on_other_kept, &on_own_kept);
+  EXPECT_GT(on_other_kept[0], 20) << "the scene must give the first mug a slice of the second";
+  EXPECT_LT(on_other[0], on_other_kept[0] / 4) << "most of the slice is the second mug's";
+  // Sides of the second mug that only the views boxing the first saw go to the first (no view
+  // of the second's own says otherwise): a few per cent.
+  EXPECT_GT(on_own[0], 0.85 * on_own_kept[0]) << "the first mug keeps its own surface";
+  EXPECT_GT(on_own[1], 0.85 * on_own_kept[1]) << "and so does the second";
+}
+
 // Three books of one footprint stacked on the table are one convex segment in every view, and
 // their boxes overlap too much to share it out by box. Cut by height above the table, each box
 // takes its own layer: three books, each model within its own book's height.

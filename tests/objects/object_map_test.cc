@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "test_scenes.h"
 
 namespace objmap {
@@ -112,6 +114,96 @@ TEST(ObjectMap, ThePublishedModelKeepsVoxelsTwoViewsReached) {
   map.AssignViews({{1, 0}, {2, 0}, {3, 0}});
   map.Rebuild([](KeyframeId) { return std::optional<Eigen::Isometry3d>(kIdentity); });
   EXPECT_EQ(map.ModelPoints(*map.Find(id)).size(), 3u);
+}
+
+// Points along x from `x0` to `x1` (metres, exclusive) one voxel (5 mm) apart, 1 m ahead.
+std::vector<Eigen::Vector3f> Strip(float x0, float x1) {
+  std::vector<Eigen::Vector3f> points;
+  for (float x = x0 + 0.0025f; x < x1; x += 0.005f) points.emplace_back(x, 0.0025f, 1.0025f);
+  return points;
+}
+
+int CountIn(const ColoredPoints& model, float x0, float x1) {
+  return static_cast<int>(
+      std::count_if(model.points.begin(), model.points.end(),
+                    [&](const Eigen::Vector3f& p) { return p.x() >= x0 && p.x() < x1; }));
+}
+
+// Two mugs side by side: a's surface x in [0, 4 cm), b's [6, 10 cm). Two of a's four views
+// boxed a alone and took the near 2 cm of b with it; b's three views reached all of b.
+struct TouchingMugs {
+  ObjectMap map;
+  ObjectId a = 0, b = 0;
+
+  explicit TouchingMugs(const ObjectMapConfig& config, int b_class = kCup) : map(config) {
+    for (int view = 0; view < 4; ++view) {
+      std::vector<Eigen::Vector3f> points = Strip(0.f, 0.04f);
+      if (view < 2) {
+        const std::vector<Eigen::Vector3f> slice = Strip(0.06f, 0.08f);
+        points.insert(points.end(), slice.begin(), slice.end());
+      }
+      ObjectObservation observation = Observation(view + 1, kCup, 0.8f, points);
+      observation.view = view;
+      if (view == 0) {
+        a = map.AddObject(observation, kIdentity);
+      } else {
+        EXPECT_TRUE(map.AddObservation(a, observation, kIdentity));
+      }
+    }
+    for (int view = 0; view < 3; ++view) {
+      ObjectObservation observation = Observation(view + 1, b_class, 0.8f, Strip(0.06f, 0.10f));
+      observation.view = view;
+      if (view == 0) {
+        b = map.AddObject(observation, kIdentity);
+      } else {
+        EXPECT_TRUE(map.AddObservation(b, observation, kIdentity));
+      }
+    }
+  }
+  [[nodiscard]] ColoredPoints Model(ObjectId id) const { return map.ModelPoints(*map.Find(id)); }
+};
+
+TEST(ObjectMap, AVoxelTwoMugsShareIsPublishedWithTheMugMostOfWhoseViewsReachedIt) {
+  const TouchingMugs mugs{ObjectMapConfig{}};
+  const ColoredPoints a = mugs.Model(mugs.a), b = mugs.Model(mugs.b);
+  EXPECT_EQ(CountIn(a, 0.f, 0.04f), 8) << "a keeps its own surface";
+  EXPECT_EQ(CountIn(a, 0.06f, 0.10f), 0) << "the slice of b (2 of a's 4 views) is b's (3 of 3)";
+  EXPECT_EQ(CountIn(b, 0.06f, 0.10f), 8) << "b keeps all of itself";
+  EXPECT_EQ(mugs.map.Find(mugs.a)->model_W.size(), 12u) << "the association still sees it all";
+}
+
+TEST(ObjectMap, SharedVoxelsStayWithBothWhenOffOrWhenTheClassesDiffer) {
+  ObjectMapConfig off;
+  off.resolve_shared_voxels = false;
+  const TouchingMugs mugs{off};
+  EXPECT_EQ(CountIn(mugs.Model(mugs.a), 0.06f, 0.10f), 4);
+  // A bowl beside the mug is another kind of thing: what the mug's views saw of it is no
+  // business of the bowl's model.
+  const TouchingMugs mug_and_bowl{ObjectMapConfig{}, kBowl};
+  EXPECT_EQ(CountIn(mug_and_bowl.Model(mug_and_bowl.a), 0.06f, 0.10f), 4);
+}
+
+TEST(ObjectMap, AOneViewObjectDoesNotTakeVoxelsFromAWellSeenOne) {
+  TouchingMugs mugs{ObjectMapConfig{}};
+  // A one-off detection over a's surface: one view reached it, against four of a's.
+  ObjectObservation stray = Observation(9, kCup, 0.5f, Strip(0.f, 0.02f));
+  stray.view = 9;
+  const ObjectId stray_id = mugs.map.AddObject(stray, kIdentity);
+  EXPECT_EQ(CountIn(mugs.Model(mugs.a), 0.f, 0.04f), 8);
+  EXPECT_EQ(CountIn(mugs.Model(stray_id), 0.f, 0.04f), 0) << "its voxels are a's";
+}
+
+TEST(ObjectMap, ThePublishedModelKeyChangesWithATouchingObjectOfItsClassOnly) {
+  TouchingMugs mugs{ObjectMapConfig{}};
+  const auto key = mugs.map.ModelKey(*mugs.map.Find(mugs.a));
+  EXPECT_EQ(key.size(), 2u) << "a and b";
+  ObjectObservation far_away = Observation(5, kCup, 0.8f, {{2.f, 0.f, 1.f}});
+  mugs.map.AddObject(far_away, kIdentity);
+  EXPECT_EQ(mugs.map.ModelKey(*mugs.map.Find(mugs.a)), key) << "a mug 2 m away changes nothing";
+  ObjectObservation more_of_b = Observation(4, kCup, 0.8f, Strip(0.06f, 0.10f));
+  more_of_b.view = 3;
+  ASSERT_TRUE(mugs.map.AddObservation(mugs.b, more_of_b, kIdentity));
+  EXPECT_NE(mugs.map.ModelKey(*mugs.map.Find(mugs.a)), key);
 }
 
 }  // namespace

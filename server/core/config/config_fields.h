@@ -60,6 +60,7 @@ void VisitMapModel(MapperConfig* m, Visitor& v) {
   v.Section("objects");
   v("model_voxel_size_m", &m->objects.model_voxel_size_m);
   v("min_voxel_observations", &m->objects.min_voxel_observations);
+  v("resolve_shared_voxels", &m->objects.resolve_shared_voxels);
   OccupancyConfig& o = m->occupancy;
   v.Section("occupancy");
   v("resolution_m", &o.resolution_m);

@@ -6,8 +6,8 @@
 namespace objmap {
 
 std::shared_ptr<const ObjectView> SnapshotBuilder::MakeView(
-    const ObjectMap& objects, const MapObject& object, bool confirmed, std::uint64_t version,
-    const std::shared_ptr<const ObjectView>& previous) {
+    const ObjectMap& objects, const MapObject& object, bool confirmed, bool same_model,
+    std::uint64_t version, const std::shared_ptr<const ObjectView>& previous) {
   auto view = std::make_shared<ObjectView>();
   view->id = object.id;
   view->class_id = object.Label();
@@ -18,17 +18,18 @@ std::shared_ptr<const ObjectView> SnapshotBuilder::MakeView(
   view->observations = static_cast<int>(object.observations.size());
   view->keyframes = object.Keyframes();
   for (int c = 0; c < kNumCocoClasses; ++c) {
-    if (object.accumulated_scores[c] > 0.f) view->scores.emplace_back(c, object.accumulated_scores[c]);
+    if (object.accumulated_scores[c] > 0.f)
+      view->scores.emplace_back(c, object.accumulated_scores[c]);
   }
   std::sort(view->scores.begin(), view->scores.end(),
             [](const auto& a, const auto& b) { return a.second > b.second; });
   view->confirmed = confirmed;
   view->changed_version = version;
-  // The model is the expensive part: shared with the previous view when the object's model did
-  // not change (only its inventory status did).
-  const bool same_model = previous && model_versions_[object.id] == object.version;
-  view->model_W = same_model ? previous->model_W
-                             : std::make_shared<const ColoredPoints>(objects.ModelPoints(object));
+  // The model is the expensive part: shared with the previous view when the object's published
+  // model did not change (only its inventory status did).
+  view->model_W = same_model && previous
+                      ? previous->model_W
+                      : std::make_shared<const ColoredPoints>(objects.ModelPoints(object));
   return view;
 }
 
@@ -52,25 +53,28 @@ std::shared_ptr<const MapSnapshot> SnapshotBuilder::Build(const Mapper& mapper,
     auto previous_it = views_.find(id);
     std::shared_ptr<const ObjectView> previous =
         previous_it == views_.end() ? nullptr : previous_it->second;
-    const bool unchanged = previous && model_versions_[id] == object.version &&
-                           previous->confirmed == is_confirmed &&
+    // A neighbour of its class changing changes the published model too (ModelKey).
+    auto model_key = mapper.objects().ModelKey(object);
+    auto key_it = model_keys_.find(id);
+    const bool same_model = key_it != model_keys_.end() && key_it->second == model_key;
+    const bool unchanged = previous && same_model && previous->confirmed == is_confirmed &&
                            previous->observations == static_cast<int>(object.observations.size());
     if (unchanged) {
       snapshot->objects.emplace(id, previous);
       continue;
     }
-    auto view = MakeView(mapper.objects(), object, is_confirmed, version, previous);
+    auto view = MakeView(mapper.objects(), object, is_confirmed, same_model, version, previous);
     (previous ? local.updated : local.added).push_back(id);
     if (previous) Touch(previous->class_id, version);
     Touch(view->class_id, version);
-    model_versions_[id] = object.version;
+    model_keys_[id] = std::move(model_key);
     snapshot->objects.emplace(id, view);
   }
   for (const auto& [id, view] : views_) {
     if (snapshot->objects.count(id) > 0) continue;
     local.removed.push_back(id);
     Touch(view->class_id, version);
-    model_versions_.erase(id);
+    model_keys_.erase(id);
   }
   views_ = snapshot->objects;
 

@@ -4,6 +4,8 @@
 #include <array>
 #include <map>
 #include <memory>
+#include <utility>
+#include <vector>
 
 #include "map_server/map_server.h"
 
@@ -20,18 +22,17 @@ class SnapshotBuilder {
   };
 
   /// A snapshot of `mapper` at `version`; `diff` (may be null) receives the object changes.
-  std::shared_ptr<const MapSnapshot> Build(const Mapper& mapper, std::uint64_t version,
-                                           Diff* diff);
+  std::shared_ptr<const MapSnapshot> Build(const Mapper& mapper, std::uint64_t version, Diff* diff);
 
  private:
   std::shared_ptr<const ObjectView> MakeView(const ObjectMap& objects, const MapObject& object,
-                                             bool confirmed,
-                                             std::uint64_t version,
+                                             bool confirmed, bool same_model, std::uint64_t version,
                                              const std::shared_ptr<const ObjectView>& previous);
   void Touch(int class_id, std::uint64_t version);
 
   std::map<ObjectId, std::shared_ptr<const ObjectView>> views_;
-  std::map<ObjectId, std::uint64_t> model_versions_;  // MapObject::version behind each view
+  // ObjectMap::ModelKey behind each view's model.
+  std::map<ObjectId, std::vector<std::pair<ObjectId, std::uint64_t>>> model_keys_;
   std::array<std::uint64_t, kNumCocoClasses> class_changed_version_{};
 };
 

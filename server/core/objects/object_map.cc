@@ -204,9 +204,69 @@ int MapObject::Views() const {
   return own + static_cast<int>(views.size());
 }
 
+std::vector<const MapObject*> ObjectMap::Rivals(const MapObject& object) const {
+  std::vector<const MapObject*> rivals;
+  if (!config_.resolve_shared_voxels || object.model_W.empty()) return rivals;
+  const float reach = config_.model_voxel_size_m;
+  const int label = object.Label();
+  for (const auto& [id, other] : objects_) {
+    if (id == object.id || other.model_W.empty() || other.Label() != label) continue;
+    if (((object.min_W.array() - reach) > other.max_W.array()).any() ||
+        ((other.min_W.array() - reach) > object.max_W.array()).any()) {
+      continue;
+    }
+    rivals.push_back(&other);
+  }
+  return rivals;
+}
+
+std::vector<std::pair<ObjectId, std::uint64_t>> ObjectMap::ModelKey(const MapObject& object) const {
+  std::vector<std::pair<ObjectId, std::uint64_t>> key = {{object.id, object.version}};
+  for (const MapObject* rival : Rivals(object)) key.emplace_back(rival->id, rival->version);
+  return key;
+}
+
+namespace {
+
+// The share of an object's views that reached a voxel, as if it also had this many views that
+// did not: one view says little (a one-off detection reaches every voxel it has), so a voxel
+// that 15 of 20 views reached stays with its object against one that a single view put there.
+constexpr float kSharePriorViews = 2.f;
+
+float ViewShare(std::uint32_t observations, int views) {
+  return static_cast<float>(observations) / (static_cast<float>(views) + kSharePriorViews);
+}
+
+}  // namespace
+
 ColoredPoints ObjectMap::ModelPoints(const MapObject& object) const {
-  const int required = std::max(1, std::min(config_.min_voxel_observations, object.Views()));
-  return object.model_W.Points(static_cast<std::uint32_t>(required));
+  const auto required = static_cast<std::uint32_t>(
+      std::max(1, std::min(config_.min_voxel_observations, object.Views())));
+  const std::vector<const MapObject*> rivals = Rivals(object);
+  if (rivals.empty()) return object.model_W.Points(required);
+  const float reach = config_.model_voxel_size_m;
+  ColoredPoints out;
+  out.points.reserve(object.model_W.size());
+  out.colors.reserve(object.model_W.size());
+  object.model_W.ForEachVoxel([&](const Eigen::Vector3f& p, std::uint32_t observations,
+                                  const std::array<std::uint8_t, 3>& color) {
+    if (observations < required) return true;
+    const float own_share = ViewShare(observations, object.Views());
+    for (const MapObject* rival : rivals) {
+      // Most voxels lie outside the rival's reach: no lookups for them.
+      if (((p.array() + reach) < rival->min_W.array()).any() ||
+          ((p.array() - reach) > rival->max_W.array()).any()) {
+        continue;
+      }
+      if (ViewShare(rival->model_W.ObservationsNear(p, 1), rival->Views()) > own_share) {
+        return true;
+      }
+    }
+    out.points.push_back(p);
+    out.colors.push_back(color);
+    return true;
+  });
+  return out;
 }
 
 const MapObject* ObjectMap::Find(ObjectId id) const {

@@ -39,6 +39,12 @@ struct ObjectMapConfig {
   /// has fewer views: a voxel one view put there and no other confirmed is mostly depth noise or
   /// a border pixel. The association keeps matching against every voxel. 1 keeps all.
   int min_voxel_observations = 2;
+  /// Objects of one class that touch (mugs side by side, books in a stack) often share a
+  /// segment, and a view that boxes only one of them adds a slice of the other to its model.
+  /// With this on, a voxel that the models of two such objects both hold (within one voxel) is
+  /// published only with the object whose views reached it in the larger share: each keeps its
+  /// own surface. The association keeps matching against every voxel.
+  bool resolve_shared_voxels = true;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
@@ -111,8 +117,12 @@ class ObjectMap {
   [[nodiscard]] ObjectId next_id() const { return next_id_; }
 
   [[nodiscard]] const MapObject* Find(ObjectId id) const;
-  /// The object's published model (min_voxel_observations).
+  /// The object's published model (min_voxel_observations, resolve_shared_voxels).
   [[nodiscard]] ColoredPoints ModelPoints(const MapObject& object) const;
+  /// What the published model depends on: the model versions of the object and of the objects
+  /// it shares voxels with (resolve_shared_voxels). Equal keys, equal published models.
+  [[nodiscard]] std::vector<std::pair<ObjectId, std::uint64_t>> ModelKey(
+      const MapObject& object) const;
   [[nodiscard]] const std::map<ObjectId, MapObject>& objects() const { return objects_; }
   [[nodiscard]] std::size_t size() const { return objects_.size(); }
   [[nodiscard]] const ObjectMapConfig& config() const { return config_; }
@@ -124,6 +134,8 @@ class ObjectMap {
   void InsertIntoModel(MapObject* object, const ObjectObservation& observation,
                        const Eigen::Isometry3d& T_W_C);
   void RebuildObject(MapObject* object, const KeyframePoseLookup& pose_of);
+  /// Objects of the same class whose models come within a voxel of the object's bounds.
+  [[nodiscard]] std::vector<const MapObject*> Rivals(const MapObject& object) const;
 
   ObjectMapConfig config_;
   std::map<ObjectId, MapObject> objects_;

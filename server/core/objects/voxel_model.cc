@@ -102,9 +102,30 @@ void VoxelModel::Insert(const VoxelModel& other) {
 ColoredPoints VoxelModel::Points() const { return Points(0); }
 
 std::size_t VoxelModel::CountSeen(std::uint32_t min_observations) const {
-  return static_cast<std::size_t>(
-      std::count_if(voxels_.begin(), voxels_.end(),
-                    [&](const auto& entry) { return entry.second.observations >= min_observations; }));
+  return static_cast<std::size_t>(std::count_if(
+      voxels_.begin(), voxels_.end(),
+      [&](const auto& entry) { return entry.second.observations >= min_observations; }));
+}
+
+std::array<std::uint8_t, 3> VoxelModel::ColorOf(const Accumulator& voxel) {
+  const Eigen::Vector3d rgb = voxel.sum_rgb * (1.0 / voxel.count);
+  return {static_cast<std::uint8_t>(RoundNonNegative(rgb.x())),
+          static_cast<std::uint8_t>(RoundNonNegative(rgb.y())),
+          static_cast<std::uint8_t>(RoundNonNegative(rgb.z()))};
+}
+
+std::uint32_t VoxelModel::ObservationsNear(const Eigen::Vector3f& p, int reach) const {
+  std::uint32_t most = 0;
+  for (int dx = -reach; dx <= reach; ++dx) {
+    for (int dy = -reach; dy <= reach; ++dy) {
+      for (int dz = -reach; dz <= reach; ++dz) {
+        const Eigen::Vector3f q = p + voxel_size_m_ * Eigen::Vector3f(dx, dy, dz);
+        auto it = voxels_.find(KeyOf(q));
+        if (it != voxels_.end()) most = std::max(most, it->second.observations);
+      }
+    }
+  }
+  return most;
 }
 
 ColoredPoints VoxelModel::Points(std::uint32_t min_observations) const {
@@ -114,10 +135,7 @@ ColoredPoints VoxelModel::Points(std::uint32_t min_observations) const {
   for (const auto& [key, voxel] : voxels_) {
     if (voxel.observations < min_observations) continue;
     out.points.push_back(MeanOf(voxel));
-    const Eigen::Vector3d rgb = voxel.sum_rgb * (1.0 / voxel.count);
-    out.colors.push_back({static_cast<std::uint8_t>(RoundNonNegative(rgb.x())),
-                          static_cast<std::uint8_t>(RoundNonNegative(rgb.y())),
-                          static_cast<std::uint8_t>(RoundNonNegative(rgb.z()))});
+    out.colors.push_back(ColorOf(voxel));
   }
   return out;
 }

@@ -51,6 +51,18 @@ class VoxelModel {
   /// Voxels that at least `min_observations` views reached.
   [[nodiscard]] std::size_t CountSeen(std::uint32_t min_observations) const;
 
+  /// The most views that reached a voxel within `reach` voxels (per axis) of `p`'s; 0 when none.
+  [[nodiscard]] std::uint32_t ObservationsNear(const Eigen::Vector3f& p, int reach) const;
+
+  /// Calls `visit(point, observations)` for each voxel, in the order of Points(); stops early
+  /// when `visit` returns false.
+  template <typename Visit>
+  void ForEachVoxel(Visit&& visit) const {
+    for (const auto& [key, voxel] : voxels_) {
+      if (!visit(MeanOf(voxel), voxel.observations, ColorOf(voxel))) return;
+    }
+  }
+
   /// Calls `visit(point)` with each point of Points(), in the same order and with the same
   /// values, without copying the model; stops early when `visit` returns false.
   template <typename Visit>
@@ -72,6 +84,7 @@ class VoxelModel {
   [[nodiscard]] static Eigen::Vector3f MeanOf(const Accumulator& voxel) {
     return (voxel.sum_xyz * (1.0 / voxel.count)).cast<float>();
   }
+  [[nodiscard]] static std::array<std::uint8_t, 3> ColorOf(const Accumulator& voxel);
 
   float voxel_size_m_;
   std::int64_t own_views_ = 0;  ///< views of insertions without one: -1, -2, ...
