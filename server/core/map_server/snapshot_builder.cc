@@ -30,14 +30,6 @@ std::shared_ptr<const ObjectView> SnapshotBuilder::MakeView(
   view->model_W = same_model && previous
                       ? previous->model_W
                       : std::make_shared<const ColoredPoints>(objects.ModelPoints(object));
-  // Where the object is, as the model it publishes says: the full model's bounds also hold the
-  // voxels that one view put there and the slices of touching neighbours.
-  PointBounds bounds;
-  if (BoundsOf(*view->model_W, &bounds)) {
-    view->centroid_W = bounds.centroid;
-    view->min_W = bounds.min;
-    view->max_W = bounds.max;
-  }
   return view;
 }
 

@@ -13,8 +13,8 @@ namespace {
 
 nlohmann::json Vector(const Eigen::Vector3f& v) { return {v.x(), v.y(), v.z()}; }
 
-nlohmann::json ObjectJson(const MapObject& object, const ColoredPoints& published_model,
-                          bool in_inventory, const ObjectEvidence& evidence) {
+nlohmann::json ObjectJson(const MapObject& object, bool in_inventory,
+                          const ObjectEvidence& evidence) {
   nlohmann::json scores = nlohmann::json::object();
   for (int c = 0; c < kNumCocoClasses; ++c) {
     if (object.accumulated_scores[c] > 0.f) {
@@ -34,9 +34,6 @@ nlohmann::json ObjectJson(const MapObject& object, const ColoredPoints& publishe
                             {"scores", classes},
                             {"points", observation.segment_C.size()}});
   }
-  // The published model's, as the server's answers give them.
-  PointBounds bounds{object.centroid_W, object.min_W, object.max_W};
-  BoundsOf(published_model, &bounds);
   return {{"id", object.id},
           {"class", std::string(CocoClassName(object.Label()))},
           {"confidence", object.Confidence()},
@@ -47,9 +44,9 @@ nlohmann::json ObjectJson(const MapObject& object, const ColoredPoints& publishe
           {"views_seeing", evidence.views_seeing},
           {"views_detecting", evidence.views_detecting},
           {"observations", observations},
-          {"centroid", Vector(bounds.centroid)},
-          {"bbox_min", Vector(bounds.min)},
-          {"bbox_max", Vector(bounds.max)},
+          {"centroid", Vector(object.centroid_W)},
+          {"bbox_min", Vector(object.min_W)},
+          {"bbox_max", Vector(object.max_W)},
           {"model_points", object.model_W.size()}};
 }
 
@@ -65,8 +62,7 @@ std::string ObjectsJson(const Mapper& mapper) {
   const std::set<ObjectId> confirmed = ConfirmedIds(mapper);
   nlohmann::json objects = nlohmann::json::array();
   for (const auto& [id, object] : mapper.objects().objects()) {
-    objects.push_back(ObjectJson(object, mapper.objects().ModelPoints(object),
-                                 confirmed.count(id) > 0, mapper.Evidence(object)));
+    objects.push_back(ObjectJson(object, confirmed.count(id) > 0, mapper.Evidence(object)));
   }
   nlohmann::json inventory = nlohmann::json::array();
   for (const InventoryEntry& entry : mapper.Inventory()) {

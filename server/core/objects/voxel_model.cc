@@ -140,21 +140,6 @@ ColoredPoints VoxelModel::Points(std::uint32_t min_observations) const {
   return out;
 }
 
-bool BoundsOf(const ColoredPoints& points, PointBounds* bounds) {
-  if (points.empty()) return false;
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  Eigen::Vector3f lo = points.points.front(), hi = lo;
-  for (const Eigen::Vector3f& p : points.points) {
-    sum += p.cast<double>();
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  }
-  bounds->centroid = (sum / static_cast<double>(points.size())).cast<float>();
-  bounds->min = lo;
-  bounds->max = hi;
-  return true;
-}
-
 ColoredPoints VoxelDownsample(const ColoredPoints& points, float voxel_size_m) {
   const bool has_color = points.colors.size() == points.points.size();
   VoxelSlots slots(points.size());

@@ -91,15 +91,6 @@ class VoxelModel {
   std::unordered_map<std::uint64_t, Accumulator> voxels_;
 };
 
-/// Mean and axis-aligned bounds of a point set.
-struct PointBounds {
-  Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
-  Eigen::Vector3f min = Eigen::Vector3f::Zero();
-  Eigen::Vector3f max = Eigen::Vector3f::Zero();
-};
-/// Those of `points`; false (and `bounds` untouched) when there are none.
-bool BoundsOf(const ColoredPoints& points, PointBounds* bounds);
-
 /// Voxel-grid downsampling of one point set: the same means as a VoxelModel given these points,
 /// one per voxel in the order of each voxel's first point.
 [[nodiscard]] ColoredPoints VoxelDownsample(const ColoredPoints& points, float voxel_size_m);
