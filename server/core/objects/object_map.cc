@@ -233,11 +233,68 @@ namespace {
 // that 15 of 20 views reached stays with its object against one that a single view put there.
 constexpr float kSharePriorViews = 2.f;
 
+// Side of the cells that mark where a rival comes near, in voxels: the object's voxels in a
+// marked cell or next to one get the exact search, so larger cells search more of them and
+// smaller ones make more cells to mark.
+constexpr float kRivalCellVoxels = 4.f;
+
+// 21 bits per axis, offset to be non-negative: +-10 km in 2 cm cells.
+constexpr std::int64_t kCellOffset = 1 << 20;
+constexpr std::uint64_t kCellMask = (1u << 21) - 1;
+
+std::uint64_t PackCell(const Eigen::Vector3f& p, float cell_m) {
+  std::uint64_t key = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    const auto index = static_cast<std::int64_t>(std::floor(p[axis] / cell_m)) + kCellOffset;
+    key |= (static_cast<std::uint64_t>(index) & kCellMask) << (21 * axis);
+  }
+  return key;
+}
+
+// The cell `dx, dy, dz` cells from `cell`.
+std::uint64_t OffsetCell(std::uint64_t cell, int dx, int dy, int dz) {
+  const int offsets[3] = {dx, dy, dz};
+  std::uint64_t key = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::uint64_t index = ((cell >> (21 * axis)) & kCellMask) + offsets[axis];
+    key |= (index & kCellMask) << (21 * axis);
+  }
+  return key;
+}
+
 float ViewShare(std::uint32_t observations, int views) {
   return static_cast<float>(observations) / (static_cast<float>(views) + kSharePriorViews);
 }
 
 }  // namespace
+
+// The cells, `cell_m` on a side, that hold a point of `model` within `region`, and the cells
+// around them: a voxel whose cell is not among them has no voxel of `model` within two voxels
+// (a cell is wider), so the search around it is skipped. One pass over the rival instead of a
+// 27-voxel search around each of the object's voxels: a table and a fragment of it found
+// apart share bounds but few voxels.
+std::vector<std::uint64_t> CellsNear(const VoxelModel& model, const Eigen::AlignedBox3f& region,
+                                     float cell_m) {
+  std::vector<std::uint64_t> held;
+  model.ForEachVoxel([&](const Eigen::Vector3f& p, std::uint32_t, const auto&) {
+    if (region.contains(p)) held.push_back(PackCell(p, cell_m));
+    return true;
+  });
+  std::sort(held.begin(), held.end());
+  held.erase(std::unique(held.begin(), held.end()), held.end());
+  std::vector<std::uint64_t> cells;
+  cells.reserve(27 * held.size());
+  for (const std::uint64_t cell : held) {
+    for (int dx = -1; dx <= 1; ++dx) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dz = -1; dz <= 1; ++dz) cells.push_back(OffsetCell(cell, dx, dy, dz));
+      }
+    }
+  }
+  std::sort(cells.begin(), cells.end());
+  cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+  return cells;
+}
 
 ColoredPoints ObjectMap::ModelPoints(const MapObject& object) const {
   const auto required = static_cast<std::uint32_t>(
@@ -245,25 +302,36 @@ ColoredPoints ObjectMap::ModelPoints(const MapObject& object) const {
   const std::vector<const MapObject*> rivals = Rivals(object);
   if (rivals.empty()) return object.model_W.Points(required);
   const float reach = config_.model_voxel_size_m;
+  const float cell_m = kRivalCellVoxels * reach;
+  // A voxel's neighbours reach up to two voxels beyond it.
+  const Eigen::AlignedBox3f own_region(object.min_W.array() - 2.f * reach,
+                                       object.max_W.array() + 2.f * reach);
+  std::vector<std::vector<std::uint64_t>> rival_cells;  // sorted
+  std::vector<Eigen::AlignedBox3f> rival_reach;
+  for (const MapObject* rival : rivals) {
+    rival_cells.push_back(CellsNear(rival->model_W, own_region, cell_m));
+    rival_reach.emplace_back(rival->min_W.array() - 2.f * reach,
+                             rival->max_W.array() + 2.f * reach);
+  }
   ColoredPoints out;
   out.points.reserve(object.model_W.size());
   out.colors.reserve(object.model_W.size());
   object.model_W.ForEachVoxel([&](const Eigen::Vector3f& p, std::uint32_t observations,
-                                  const std::array<std::uint8_t, 3>& color) {
+                                  const auto& color) {
     if (observations < required) return true;
     const float own_share = ViewShare(observations, object.Views());
-    for (const MapObject* rival : rivals) {
-      // Most voxels lie outside the rival's reach: no lookups for them.
-      if (((p.array() + reach) < rival->min_W.array()).any() ||
-          ((p.array() - reach) > rival->max_W.array()).any()) {
+    for (std::size_t r = 0; r < rivals.size(); ++r) {
+      // Most voxels lie beyond the rival's bounds, the rest mostly in cells far from it.
+      if (!rival_reach[r].contains(p) ||
+          !std::binary_search(rival_cells[r].begin(), rival_cells[r].end(), PackCell(p, cell_m))) {
         continue;
       }
-      if (ViewShare(rival->model_W.ObservationsNear(p, 1), rival->Views()) > own_share) {
+      if (ViewShare(rivals[r]->model_W.ObservationsNear(p, 1), rivals[r]->Views()) > own_share) {
         return true;
       }
     }
     out.points.push_back(p);
-    out.colors.push_back(color);
+    out.colors.push_back(color());
     return true;
   });
   return out;

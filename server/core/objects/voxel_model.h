@@ -54,12 +54,14 @@ class VoxelModel {
   /// The most views that reached a voxel within `reach` voxels (per axis) of `p`'s; 0 when none.
   [[nodiscard]] std::uint32_t ObservationsNear(const Eigen::Vector3f& p, int reach) const;
 
-  /// Calls `visit(point, observations)` for each voxel, in the order of Points(); stops early
-  /// when `visit` returns false.
+  /// Calls `visit(point, observations, color)` for each voxel, in the order of Points(), where
+  /// `color()` gives the voxel's colour (worked out only when asked); stops early when `visit`
+  /// returns false.
   template <typename Visit>
   void ForEachVoxel(Visit&& visit) const {
     for (const auto& [key, voxel] : voxels_) {
-      if (!visit(MeanOf(voxel), voxel.observations, ColorOf(voxel))) return;
+      const Accumulator& accumulator = voxel;
+      if (!visit(MeanOf(voxel), voxel.observations, [&] { return ColorOf(accumulator); })) return;
     }
   }
 
