@@ -18,6 +18,15 @@ using testing::SceneBox;
 
 const int kCup = CocoClassId("cup");
 
+// The mapper's objects labelled `class_id`, in id order.
+std::vector<const MapObject*> ObjectsLabelled(const Mapper& mapper, int class_id) {
+  std::vector<const MapObject*> labelled;
+  for (const auto& [id, object] : mapper.objects().objects()) {
+    if (object.Label() == class_id) labelled.push_back(&object);
+  }
+  return labelled;
+}
+
 // A table top with two cups and a wall behind, seen from three viewpoints.
 class MapperScene : public ::testing::Test {
  protected:
@@ -438,10 +447,7 @@ TEST_F(MapperScene, TouchingSameClassObjectsShareTheirSegmentAndStayTwo) {
       std::string why;
       EXPECT_TRUE(mapper->AddKeyframe(Frame(view), CupDetections(view), &result, &why)) << why;
     }
-    cups->clear();
-    for (const auto& [id, object] : mapper->objects().objects()) {
-      if (object.Label() == kCup) cups->push_back(&object);
-    }
+    *cups = ObjectsLabelled(*mapper, kCup);
     return mapper;
   };
   std::vector<const MapObject*> cups;
@@ -486,10 +492,7 @@ TEST_F(MapperScene, ATouchingMugSeenAloneDoesNotPublishItsNeighboursSide) {
       std::string why;
       ASSERT_TRUE(mapper.AddKeyframe(Frame(view), detections, &result, &why)) << why;
     }
-    std::vector<const MapObject*> cups;
-    for (const auto& [id, object] : mapper.objects().objects()) {
-      if (object.Label() == kCup) cups.push_back(&object);
-    }
+    std::vector<const MapObject*> cups = ObjectsLabelled(mapper, kCup);
     ASSERT_EQ(cups.size(), 2u);
     // cups[0]: the first mug (y < 0).
     if (cups[0]->centroid_W.y() > cups[1]->centroid_W.y()) std::swap(cups[0], cups[1]);
@@ -534,10 +537,7 @@ TEST_F(MapperScene, TwoMonitorsSideBySideStayTwo) {
         << why;
     EXPECT_EQ(result.detections_used, 2) << "view " << view;
   }
-  std::vector<const MapObject*> monitors;
-  for (const auto& [id, object] : mapper.objects().objects()) {
-    if (object.Label() == kTv) monitors.push_back(&object);
-  }
+  std::vector<const MapObject*> monitors = ObjectsLabelled(mapper, kTv);
   ASSERT_EQ(monitors.size(), 2u);
   std::sort(monitors.begin(), monitors.end(), [](const MapObject* a, const MapObject* b) {
     return a->centroid_W.y() < b->centroid_W.y();
@@ -582,10 +582,7 @@ TEST_F(MapperScene, AFridgeSeenInPartsIsOneObject) {
         << why;
     EXPECT_EQ(result.detections_used, 1) << "view " << view;
   }
-  std::vector<const MapObject*> fridges;
-  for (const auto& [id, object] : mapper.objects().objects()) {
-    if (object.Label() == kFridge) fridges.push_back(&object);
-  }
+  std::vector<const MapObject*> fridges = ObjectsLabelled(mapper, kFridge);
   ASSERT_EQ(fridges.size(), 1u);
   EXPECT_EQ(fridges[0]->observations.size(), eyes_targets.size());
   EXPECT_GT(fridges[0]->max_W.z() - fridges[0]->min_W.z(), 1.4) << "top and bottom";
@@ -642,10 +639,7 @@ TEST_F(MapperScene, StackedBooksAreCutByHeightAndStayThree) {
       std::string why;
       EXPECT_TRUE(mapper->AddKeyframe(Frame(view), detections, &result, &why)) << why;
     }
-    books->clear();
-    for (const auto& [id, object] : mapper->objects().objects()) {
-      if (object.Label() == kBook) books->push_back(&object);
-    }
+    *books = ObjectsLabelled(*mapper, kBook);
     std::sort(books->begin(), books->end(), [](const MapObject* a, const MapObject* b) {
       return a->centroid_W.z() < b->centroid_W.z();
     });
@@ -781,10 +775,7 @@ TEST_F(MapperScene, ATableIsItsWholeTopNotAChairBackOrANearerTable) {
         << why;
     EXPECT_EQ(result.detections_used, 2) << "view " << view;
   }
-  std::vector<const MapObject*> tables;
-  for (const auto& [id, object] : mapper.objects().objects()) {
-    if (object.Label() == kTable) tables.push_back(&object);
-  }
+  std::vector<const MapObject*> tables = ObjectsLabelled(mapper, kTable);
   ASSERT_EQ(tables.size(), 2u);
   std::sort(tables.begin(), tables.end(), [](const MapObject* a, const MapObject* b) {
     return a->centroid_W.x() < b->centroid_W.x();

@@ -238,35 +238,9 @@ constexpr float kSharePriorViews = 2.f;
 // smaller ones make more cells to mark.
 constexpr float kRivalCellVoxels = 4.f;
 
-// 21 bits per axis, offset to be non-negative: +-10 km in 2 cm cells.
-constexpr std::int64_t kCellOffset = 1 << 20;
-constexpr std::uint64_t kCellMask = (1u << 21) - 1;
-
-std::uint64_t PackCell(const Eigen::Vector3f& p, float cell_m) {
-  std::uint64_t key = 0;
-  for (int axis = 0; axis < 3; ++axis) {
-    const auto index = static_cast<std::int64_t>(std::floor(p[axis] / cell_m)) + kCellOffset;
-    key |= (static_cast<std::uint64_t>(index) & kCellMask) << (21 * axis);
-  }
-  return key;
-}
-
-// The cell `dx, dy, dz` cells from `cell`.
-std::uint64_t OffsetCell(std::uint64_t cell, int dx, int dy, int dz) {
-  const int offsets[3] = {dx, dy, dz};
-  std::uint64_t key = 0;
-  for (int axis = 0; axis < 3; ++axis) {
-    const std::uint64_t index = ((cell >> (21 * axis)) & kCellMask) + offsets[axis];
-    key |= (index & kCellMask) << (21 * axis);
-  }
-  return key;
-}
-
 float ViewShare(std::uint32_t observations, int views) {
   return static_cast<float>(observations) / (static_cast<float>(views) + kSharePriorViews);
 }
-
-}  // namespace
 
 // The cells, `cell_m` on a side, that hold a point of `model` within `region`, and the cells
 // around them: a voxel whose cell is not among them has no voxel of `model` within two voxels
@@ -277,7 +251,7 @@ std::vector<std::uint64_t> CellsNear(const VoxelModel& model, const Eigen::Align
                                      float cell_m) {
   std::vector<std::uint64_t> held;
   model.ForEachVoxel([&](const Eigen::Vector3f& p, std::uint32_t, const auto&) {
-    if (region.contains(p)) held.push_back(PackCell(p, cell_m));
+    if (region.contains(p)) held.push_back(VoxelKey(p, cell_m));
     return true;
   });
   std::sort(held.begin(), held.end());
@@ -287,7 +261,7 @@ std::vector<std::uint64_t> CellsNear(const VoxelModel& model, const Eigen::Align
   for (const std::uint64_t cell : held) {
     for (int dx = -1; dx <= 1; ++dx) {
       for (int dy = -1; dy <= 1; ++dy) {
-        for (int dz = -1; dz <= 1; ++dz) cells.push_back(OffsetCell(cell, dx, dy, dz));
+        for (int dz = -1; dz <= 1; ++dz) cells.push_back(OffsetVoxelKey(cell, dx, dy, dz));
       }
     }
   }
@@ -296,9 +270,12 @@ std::vector<std::uint64_t> CellsNear(const VoxelModel& model, const Eigen::Align
   return cells;
 }
 
+}  // namespace
+
 ColoredPoints ObjectMap::ModelPoints(const MapObject& object) const {
-  const auto required = static_cast<std::uint32_t>(
-      std::max(1, std::min(config_.min_voxel_observations, object.Views())));
+  const int views = object.Views();
+  const auto required =
+      static_cast<std::uint32_t>(std::max(1, std::min(config_.min_voxel_observations, views)));
   const std::vector<const MapObject*> rivals = Rivals(object);
   if (rivals.empty()) return object.model_W.Points(required);
   const float reach = config_.model_voxel_size_m;
@@ -308,7 +285,9 @@ ColoredPoints ObjectMap::ModelPoints(const MapObject& object) const {
                                        object.max_W.array() + 2.f * reach);
   std::vector<std::vector<std::uint64_t>> rival_cells;  // sorted
   std::vector<Eigen::AlignedBox3f> rival_reach;
+  std::vector<int> rival_views;  // MapObject::Views walks the observations: once per rival
   for (const MapObject* rival : rivals) {
+    rival_views.push_back(rival->Views());
     rival_cells.push_back(CellsNear(rival->model_W, own_region, cell_m));
     rival_reach.emplace_back(rival->min_W.array() - 2.f * reach,
                              rival->max_W.array() + 2.f * reach);
@@ -319,14 +298,14 @@ ColoredPoints ObjectMap::ModelPoints(const MapObject& object) const {
   object.model_W.ForEachVoxel([&](const Eigen::Vector3f& p, std::uint32_t observations,
                                   const auto& color) {
     if (observations < required) return true;
-    const float own_share = ViewShare(observations, object.Views());
+    const float own_share = ViewShare(observations, views);
     for (std::size_t r = 0; r < rivals.size(); ++r) {
       // Most voxels lie beyond the rival's bounds, the rest mostly in cells far from it.
       if (!rival_reach[r].contains(p) ||
-          !std::binary_search(rival_cells[r].begin(), rival_cells[r].end(), PackCell(p, cell_m))) {
+          !std::binary_search(rival_cells[r].begin(), rival_cells[r].end(), VoxelKey(p, cell_m))) {
         continue;
       }
-      if (ViewShare(rivals[r]->model_W.ObservationsNear(p, 1), rivals[r]->Views()) > own_share) {
+      if (ViewShare(rivals[r]->model_W.ObservationsNear(p, 1), rival_views[r]) > own_share) {
         return true;
       }
     }

@@ -9,19 +9,6 @@
 namespace objmap {
 namespace {
 
-// 21 bits per axis, offset so that +-10 km at 5 mm fits in the signed range.
-constexpr std::int64_t kAxisOffset = 1 << 20;
-constexpr std::uint64_t kAxisMask = (1u << 21) - 1;
-
-std::uint64_t VoxelKey(const Eigen::Vector3f& p, float voxel_size_m) {
-  std::uint64_t key = 0;
-  for (int axis = 0; axis < 3; ++axis) {
-    const auto index = static_cast<std::int64_t>(std::floor(p[axis] / voxel_size_m)) + kAxisOffset;
-    key |= (static_cast<std::uint64_t>(index) & kAxisMask) << (21 * axis);
-  }
-  return key;
-}
-
 // Sums of one voxel of VoxelDownsample, as VoxelModel keeps them.
 struct VoxelSums {
   Eigen::Vector3d xyz = Eigen::Vector3d::Zero();
@@ -61,6 +48,31 @@ class VoxelSlots {
 };
 
 }  // namespace
+
+namespace {
+// 21 bits per axis, offset so that +-10 km at 5 mm fits in the signed range.
+constexpr std::int64_t kAxisOffset = 1 << 20;
+constexpr std::uint64_t kAxisMask = (1u << 21) - 1;
+}  // namespace
+
+std::uint64_t VoxelKey(const Eigen::Vector3f& p, float voxel_size_m) {
+  std::uint64_t key = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    const auto index = static_cast<std::int64_t>(std::floor(p[axis] / voxel_size_m)) + kAxisOffset;
+    key |= (static_cast<std::uint64_t>(index) & kAxisMask) << (21 * axis);
+  }
+  return key;
+}
+
+std::uint64_t OffsetVoxelKey(std::uint64_t key, int dx, int dy, int dz) {
+  const int offsets[3] = {dx, dy, dz};
+  std::uint64_t moved = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::uint64_t index = ((key >> (21 * axis)) & kAxisMask) + offsets[axis];
+    moved |= (index & kAxisMask) << (21 * axis);
+  }
+  return moved;
+}
 
 std::uint64_t VoxelModel::KeyOf(const Eigen::Vector3f& p) const {
   return VoxelKey(p, voxel_size_m_);

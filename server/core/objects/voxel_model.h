@@ -93,6 +93,12 @@ class VoxelModel {
   std::unordered_map<std::uint64_t, Accumulator> voxels_;
 };
 
+/// The key of the grid cell, `voxel_size_m` on a side, that holds `p`: VoxelModel's and
+/// VoxelDownsample's voxels, or any coarser grid.
+[[nodiscard]] std::uint64_t VoxelKey(const Eigen::Vector3f& p, float voxel_size_m);
+/// The key of the cell `dx, dy, dz` cells from the one `key` names.
+[[nodiscard]] std::uint64_t OffsetVoxelKey(std::uint64_t key, int dx, int dy, int dz);
+
 /// Voxel-grid downsampling of one point set: the same means as a VoxelModel given these points,
 /// one per voxel in the order of each voxel's first point.
 [[nodiscard]] ColoredPoints VoxelDownsample(const ColoredPoints& points, float voxel_size_m);
