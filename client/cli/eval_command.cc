@@ -230,6 +230,9 @@ int EvaluateWithGroundTruth(const std::vector<MappedObject>& mapped, const std::
     }
     document["matches"] = matches;
     document["mean_model_to_surface_m"] = evaluation.mean_model_to_surface_m;
+    document["unknown_objects"] = {{"mapped", evaluation.unknown.mapped},
+                                   {"on_real", evaluation.unknown.on_real},
+                                   {"on_missed", evaluation.unknown.on_missed}};
     if (occupancy) document["occupancy"] = OccupancyJson(*occupancy);
     std::cout << document.dump(2) << "\n";
     return kOk;
@@ -244,6 +247,12 @@ int EvaluateWithGroundTruth(const std::vector<MappedObject>& mapped, const std::
                     ? std::string("n/a (no models or no surface samples)")
                     : Format("%.2f cm", 100.0 * evaluation.mean_model_to_surface_m))
             << " over " << evaluation.matches.size() << " matched objects\n";
+  if (evaluation.unknown.mapped > 0) {
+    std::cout << "unknown objects (segmented, never named; not counted above): "
+              << evaluation.unknown.mapped << ", " << evaluation.unknown.on_real
+              << " on a real object, " << evaluation.unknown.on_missed
+              << " on one the named objects missed\n";
+  }
   if (occupancy) PrintOccupancy(*occupancy);
   return kOk;
 }
@@ -257,7 +266,9 @@ int EvaluateWithCounts(const std::vector<MappedObject>& mapped, const std::strin
     return kError;
   }
   std::map<int, int> found;
-  for (const MappedObject& object : mapped) ++found[object.class_id];
+  for (const MappedObject& object : mapped) {
+    if (object.class_id != kUnknownClassId) ++found[object.class_id];  // no count to match
+  }
   const std::map<int, ClassCounts> per_class = ScoreCounts(expected, found);
   ClassCounts totals;
   for (const auto& [class_id, counts] : per_class) totals.Add(counts);

@@ -157,7 +157,7 @@ bool DetectionFromProto(const v1::Detection& proto, const std::string& field, De
 void ObjectToProto(const ObjectView& view, bool include_model, v1::Object* object) {
   object->set_id(view.id);
   object->set_class_id(view.class_id);
-  object->set_class_name(std::string(CocoClassName(view.class_id)));
+  object->set_class_name(std::string(ObjectClassName(view.class_id)));
   object->set_confidence(view.confidence);
   *object->mutable_centroid() = Vec3ToProto(view.centroid_W);
   *object->mutable_bounds()->mutable_min() = Vec3ToProto(view.min_W);
@@ -177,7 +177,7 @@ void ObjectToProto(const ObjectView& view, bool include_model, v1::Object* objec
 
 void InventoryEntryToProto(const InventoryEntry& entry, v1::InventoryEntry* proto) {
   proto->set_class_id(entry.class_id);
-  proto->set_class_name(std::string(CocoClassName(entry.class_id)));
+  proto->set_class_name(std::string(ObjectClassName(entry.class_id)));
   proto->set_count(entry.count);
   proto->set_mean_confidence(entry.mean_confidence);
   proto->mutable_object_ids()->Add(entry.objects.begin(), entry.objects.end());

@@ -12,8 +12,12 @@ constexpr double kDefaultRayRangeM = 10.0;
 bool FilterFromProto(const v1::QueryObjectsRequest& request, ObjectFilter* filter,
                      std::string* why) {
   if (!request.class_name().empty()) {
-    int class_id = -1;
-    if (!ClassIdFromName(request.class_name(), "class_name", &class_id, why)) return false;
+    // Map objects may also be "unknown": segmented, never named.
+    const int class_id = ObjectClassId(request.class_name());
+    if (class_id < 0) {
+      *why = "class_name '" + request.class_name() + "' is neither a COCO class nor \"unknown\"";
+      return false;
+    }
     filter->class_id = class_id;
   }
   if (request.has_region()) {

@@ -379,7 +379,7 @@ Eigen::Vector3d PointFromMsg(const geometry_msgs::Point& point) {
 void ObjectToMsg(const ObjectView& view, bool include_model, objmap_msgs::Object* object) {
   object->id = view.id;
   object->class_id = view.class_id;
-  object->class_name = std::string(CocoClassName(view.class_id));
+  object->class_name = std::string(ObjectClassName(view.class_id));
   object->confidence = view.confidence;
   object->centroid = PointToMsg(view.centroid_W.cast<double>());
   object->bounds_min = PointToMsg(view.min_W.cast<double>());
@@ -402,7 +402,7 @@ void ObjectToMsg(const ObjectView& view, bool include_model, objmap_msgs::Object
 
 void InventoryEntryToMsg(const InventoryEntry& entry, objmap_msgs::InventoryEntry* msg) {
   msg->class_id = entry.class_id;
-  msg->class_name = std::string(CocoClassName(entry.class_id));
+  msg->class_name = std::string(ObjectClassName(entry.class_id));
   msg->count = entry.count;
   msg->mean_confidence = entry.mean_confidence;
   msg->object_ids.assign(entry.objects.begin(), entry.objects.end());

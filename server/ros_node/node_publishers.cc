@@ -89,7 +89,7 @@ void MapNode::Impl::PublishMarkers(const MapSnapshot& snapshot) {
     label.scale.z = 0.06;
     label.color.a = 1.0f;
     std::ostringstream text;
-    text << CocoClassName(view->class_id) << " #" << id << " " << std::fixed << std::setprecision(2)
+    text << ObjectClassName(view->class_id) << " #" << id << " " << std::fixed << std::setprecision(2)
          << view->confidence;
     label.text = text.str();
     markers.markers.push_back(label);

@@ -56,12 +56,13 @@ bool MapNode::Impl::QueryObjects(objmap_msgs::QueryObjects::Request& request,
                                  objmap_msgs::QueryObjects::Response& response) {
   ObjectFilter filter;
   if (!request.class_name.empty()) {
-    const int class_id = CocoClassId(request.class_name);
+    // Map objects may also be "unknown": segmented, never named.
+    const int class_id = ObjectClassId(request.class_name);
     if (class_id < 0) {
-      return Answer(
-          "query_objects",
-          ServiceStatus::Invalid("class_name '" + request.class_name + "' is not a COCO class"),
-          &response);
+      return Answer("query_objects",
+                    ServiceStatus::Invalid("class_name '" + request.class_name +
+                                           "' is neither a COCO class nor \"unknown\""),
+                    &response);
     }
     filter.class_id = class_id;
   }

@@ -96,6 +96,36 @@ TEST(EvaluateObjects, CountsDuplicatesMergesMissesAndWrongLabels) {
 
 // An object the sequence never showed (a chair behind the camera's path) is not real: not a
 // miss, not a true positive, counted apart as unseen; one shown in a single frame is real.
+// Unknown objects have no class to be right or wrong about: they are counted apart, by whether
+// they stand on a real object and whether the named objects missed that one.
+TEST(EvaluateObjects, UnknownObjectsAreCountedApartFromTheClasses) {
+  const Eigen::Vector3d cup_size(0.08, 0.08, 0.1);
+  const std::vector<GroundTruthObject> real = {
+      Real(1, "cup", {0, 0, 0}, cup_size),
+      Real(2, "cup", {0.5, 0, 0}, cup_size),
+  };
+  MappedObject on_found = Mapped(11, "cup", {-0.04, -0.04, -0.05}, {0.04, 0.04, 0.05});
+  on_found.class_id = kUnknownClassId;  // beside the named cup 1
+  MappedObject on_missed = Mapped(12, "cup", {0.46, -0.04, -0.05}, {0.54, 0.04, 0.05});
+  on_missed.class_id = kUnknownClassId;
+  MappedObject on_nothing = Mapped(13, "cup", {5, 5, 5}, {5.1, 5.1, 5.1});
+  on_nothing.class_id = kUnknownClassId;
+  const std::vector<MappedObject> mapped = {
+      Mapped(10, "cup", {-0.04, -0.04, -0.05}, {0.04, 0.04, 0.05}), on_found, on_missed,
+      on_nothing};
+  const ObjectEvaluation evaluation = EvaluateObjects(real, mapped, EvaluationConfig{});
+  EXPECT_EQ(evaluation.per_class.count(kUnknownClassId), 0u);
+  const ClassCounts& cups = Counts(evaluation, "cup");
+  EXPECT_EQ(cups.mapped, 1);
+  EXPECT_EQ(cups.true_positives, 1);
+  EXPECT_EQ(cups.false_positives, 0);
+  EXPECT_EQ(cups.duplicates, 0);
+  EXPECT_EQ(cups.misses, 1);
+  EXPECT_EQ(evaluation.unknown.mapped, 3);
+  EXPECT_EQ(evaluation.unknown.on_real, 2);
+  EXPECT_EQ(evaluation.unknown.on_missed, 1);
+}
+
 TEST(EvaluateObjects, ObjectsTheSequenceNeverShowedAreUnseenNotMissed) {
   std::vector<GroundTruthObject> real = {
       Real(1, "chair", {0, 0, 0.45}, {0.5, 0.5, 0.9}),
@@ -437,11 +467,14 @@ TEST_F(EvaluationFiles, MapDirectoriesOfBothWritersGiveTheirInventoryObjectsWith
     {"id": 1, "class": "cup", "in_inventory": true, "centroid": [0.005, 0, 0],
      "bbox_min": [0, 0, 0], "bbox_max": [0.01, 0, 0]},
     {"id": 2, "class": "chair", "in_inventory": false, "centroid": [1, 1, 1],
-     "bbox_min": [1, 1, 1], "bbox_max": [1, 1, 1]}]})");
+     "bbox_min": [1, 1, 1], "bbox_max": [1, 1, 1]},
+    {"id": 3, "class": "unknown", "in_inventory": true, "centroid": [2, 2, 2],
+     "bbox_min": [2, 2, 2], "bbox_max": [2, 2, 2]}]})");
   std::vector<MappedObject> objects;
   ASSERT_TRUE(ReadMapDirectory(dir_.string(), &objects, &why)) << why;
-  ASSERT_EQ(objects.size(), 1u);  // the chair is not in the inventory
+  ASSERT_EQ(objects.size(), 2u);  // the chair is not in the inventory
   EXPECT_EQ(objects[0].class_id, CocoClassId("cup"));
+  EXPECT_EQ(objects[1].class_id, kUnknownClassId);
   EXPECT_EQ(objects[0].model_W.size(), 2u);
   EXPECT_FLOAT_EQ(objects[0].model_W[1].x(), 0.01f);
 

@@ -139,7 +139,7 @@ TEST_F(MapServiceTest, BadRequestsGetTheirCodeAndNameTheField) {
   v1::QueryObjectsResponse objects;
   const grpc::Status unicorn = stub_->QueryObjects(&query_context, query, &objects);
   EXPECT_EQ(unicorn.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
-  EXPECT_EQ(unicorn.error_message(), "class_name 'unicorn' is not a COCO class");
+  EXPECT_EQ(unicorn.error_message(), "class_name 'unicorn' is neither a COCO class nor \"unknown\"");
 
   grpc::ClientContext free_context;
   v1::IsFreeRequest is_free;

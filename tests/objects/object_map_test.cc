@@ -55,6 +55,28 @@ TEST(ObjectMap, AccumulatesScoresAsThePaper) {
                                   Eigen::Isometry3d::Identity()));
 }
 
+TEST(ObjectMap, AnObjectOnlySegmentedIsUnknownUntilADetectionNamesIt) {
+  ObjectMap map;
+  const auto points = testing::BoxSurface({0, 0, 0}, {0.08f, 0.08f, 0.1f}, 0.005f);
+  const ObjectId id = map.AddObject(Observation(1, kUnknownClassId, 0.f, points), kIdentity);
+  EXPECT_TRUE(IsUnclassified(map.Find(id)->observations[0]));
+  EXPECT_TRUE(map.AddObservation(id, Observation(2, kUnknownClassId, 0.f, points), kIdentity));
+  EXPECT_EQ(map.Find(id)->Label(), kUnknownClassId);
+  EXPECT_EQ(map.Find(id)->Confidence(), 0.f);
+  EXPECT_GT(map.Find(id)->model_W.size(), 0u);
+  EXPECT_TRUE(map.AddObservation(id, Observation(3, kCup, 0.6f, points), kIdentity));
+  EXPECT_FALSE(IsUnclassified(map.Find(id)->observations[2]));
+  EXPECT_EQ(map.Find(id)->Label(), kCup);
+  // Over the one observation that named it: the views that only segmented it say nothing of
+  // its class.
+  EXPECT_NEAR(map.Find(id)->Confidence(), 0.6f, 1e-6);
+  std::map<ObjectId, std::vector<ObjectObservation>> stored = {
+      {id, map.Find(id)->observations}};
+  stored[id].pop_back();
+  map.Restore(stored, id + 1, [](KeyframeId) { return kIdentity; });
+  EXPECT_EQ(map.Find(id)->Label(), kUnknownClassId) << "restored from its unnamed views";
+}
+
 TEST(ObjectMap, ModelIsInWorldFrameAndRebuildsWithNewPoses) {
   ObjectMap map;
   const auto points_C = testing::BoxSurface({-0.05f, -0.05f, 1.f}, {0.05f, 0.05f, 1.1f}, 0.005f);

@@ -32,6 +32,13 @@ bool SeenTogether(const MapObject& a, const MapObject& b) {
   return !common.empty();
 }
 
+// One label, or one of them is an unknown object: the views that segmented a chair the
+// detector missed and those where it named it make one chair.
+bool SameOrUnknownLabel(const MapObject& a, const MapObject& b) {
+  const int label_a = a.Label(), label_b = b.Label();
+  return label_a == label_b || label_a == kUnknownClassId || label_b == kUnknownClassId;
+}
+
 float ObjectRadius(const MapObject& object) {
   return std::max((object.max_W - object.centroid_W).norm(),
                   (object.min_W - object.centroid_W).norm());
@@ -254,7 +261,10 @@ std::vector<ObjectId> Associator::CandidatesAround(const ObjectMap& map,
 
 std::vector<std::optional<ObjectId>> Associator::AssignKeyframe(
     const ObjectMap& map, const std::vector<SegmentToAssociate>& segments) {
+  // Named segments choose first: an unknown segment beside a detection's must not take the
+  // object the detection shows.
   struct Pair {
+    bool unclassified;
     float rank;
     std::size_t segment;
     ObjectId object;
@@ -277,10 +287,12 @@ std::vector<std::optional<ObjectId>> Associator::AssignKeyframe(
       // other, so a segment matches both fully; the nearer centroid tells which one it shows.
       // A centimetre of centroid distance weighs as one percent of matched points.
       const float fraction = static_cast<float>(count.matched) / static_cast<float>(count.tested);
-      pairs.push_back({fraction - (object.centroid_W - centroid).norm(), s, id});
+      pairs.push_back({segments[s].class_id == kUnknownClassId,
+                       fraction - (object.centroid_W - centroid).norm(), s, id});
     }
   }
   std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
+    if (a.unclassified != b.unclassified) return b.unclassified;
     return a.rank != b.rank ? a.rank > b.rank : a.segment < b.segment;
   });
   std::vector<std::optional<ObjectId>> assignment(segments.size());
@@ -296,8 +308,12 @@ std::vector<std::optional<ObjectId>> Associator::AssignKeyframe(
 
 bool Associator::ClassCompatible(const MapObject& object, int class_id) const {
   if (config_.min_class_share <= 0.f) return true;
+  // What nobody named may be anything: an unknown segment may show any object, and a detection
+  // names an unknown object.
+  const int label = object.Label();
+  if (class_id == kUnknownClassId || label == kUnknownClassId) return true;
   if (class_id < 0 || class_id >= kNumCocoClasses) return false;
-  const float best = object.accumulated_scores[object.Label()];
+  const float best = object.accumulated_scores[label];
   return object.accumulated_scores[class_id] >= config_.min_class_share * best;
 }
 
@@ -312,7 +328,7 @@ std::vector<std::pair<ObjectId, ObjectId>> Associator::FindDuplicates(
     const auto& [centroid, radius] = cache_->BoundingSphereOf(*object);
     for (ObjectId other_id : CandidatesAround(map, centroid, radius)) {
       const MapObject& other = *map.Find(other_id);
-      if (other_id == id || other.Label() != object->Label()) continue;
+      if (other_id == id || !SameOrUnknownLabel(other, *object)) continue;
       if (std::find(absorbed.begin(), absorbed.end(), other_id) != absorbed.end()) continue;
       if (SeenTogether(*object, other)) continue;
       // Test the smaller model against the larger one: a partial view of an object is a

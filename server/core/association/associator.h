@@ -71,12 +71,13 @@ class Associator {
       const ObjectMap& map, const std::vector<SegmentToAssociate>& segments);
 
   /// Pairs of objects (kept, absorbed) among `ids` and their neighbours that describe the same
-  /// thing: same label, most of the smaller model lies within duplicate distance of the larger,
+  /// thing: same label (or one of them unknown, kUnknownClassId), most of the smaller model lies within duplicate distance of the larger,
   /// and no keyframe observed both (objects seen apart at one moment are two objects).
   [[nodiscard]] std::vector<std::pair<ObjectId, ObjectId>> FindDuplicates(
       const ObjectMap& map, const std::vector<ObjectId>& ids);
 
-  /// True when `class_id` has enough of the object's accumulated score (min_class_share).
+  /// True when `class_id` has enough of the object's accumulated score (min_class_share), or
+  /// when the segment or the object is of class unknown (kUnknownClassId).
   [[nodiscard]] bool ClassCompatible(const MapObject& object, int class_id) const;
 
   /// Drops the cached search structures of objects that no longer exist.

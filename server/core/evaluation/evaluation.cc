@@ -7,6 +7,7 @@
 #include <unordered_map>
 
 #include "evaluation/voxel_set.h"
+#include "types/coco_classes.h"
 
 namespace objmap {
 namespace {
@@ -285,7 +286,12 @@ ObjectEvaluation EvaluateObjects(const std::vector<GroundTruthObject>& ground_tr
   for (const GroundTruthObject& object : real) ++result.per_class[object.class_id].real;
   // Each mapped object stands for the nearest real object of its class it can stand for.
   std::map<std::size_t, std::vector<std::size_t>> standing_for;  // real index -> mapped indices
+  std::vector<std::size_t> unknown;
   for (std::size_t m = 0; m < mapped.size(); ++m) {
+    if (mapped[m].class_id == kUnknownClassId) {
+      unknown.push_back(m);
+      continue;
+    }
     ClassCounts& counts = result.per_class[mapped[m].class_id];
     ++counts.mapped;
     std::size_t best = real.size();
@@ -338,6 +344,17 @@ ObjectEvaluation EvaluateObjects(const std::vector<GroundTruthObject>& ground_tr
         MeanDistance(real[r].surface_W, mapped[m].model_W, config.max_model_distance_m);
     if (match.model_to_surface_m >= 0.0) accuracies.push_back(match.model_to_surface_m);
     result.matches.push_back(match);
+  }
+  for (std::size_t m : unknown) {
+    ++result.unknown.mapped;
+    bool on_real = false, on_missed = false;
+    for (std::size_t r = 0; r < real.size(); ++r) {
+      if (!CanStandFor(mapped[m], real[r], config)) continue;
+      on_real = true;
+      on_missed = on_missed || standing_for.count(r) == 0;
+    }
+    result.unknown.on_real += on_real ? 1 : 0;
+    result.unknown.on_missed += on_missed ? 1 : 0;
   }
   for (const auto& [class_id, counts] : result.per_class) result.totals.Add(counts);
   if (!accuracies.empty()) {

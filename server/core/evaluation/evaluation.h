@@ -97,9 +97,18 @@ struct ObjectMatch {
   double surface_to_model_m = -1.0;
 };
 
+/// Mapped objects of class unknown (segmented, never named): no class to be right or wrong
+/// about, so they are counted apart from the classes' figures.
+struct UnknownObjectCounts {
+  int mapped = 0;
+  int on_real = 0;    ///< that stand on a real object (any class; the class margins hold)
+  int on_missed = 0;  ///< of those, on a real object that no named mapped object stands for
+};
+
 struct ObjectEvaluation {
-  std::map<int, ClassCounts> per_class;  ///< by class id
+  std::map<int, ClassCounts> per_class;  ///< by class id; unknown objects are not among them
   ClassCounts totals;
+  UnknownObjectCounts unknown;
   std::vector<ObjectMatch> matches;  ///< one per true positive
   /// Mean of the matches' model_to_surface_m (those that have one); negative when none.
   double mean_model_to_surface_m = -1.0;

@@ -42,12 +42,16 @@ bool ParseObjectsArray(const std::string& path, Json* document, std::string* why
   return true;
 }
 
-bool ClassOf(const Json& entry, const std::string& where, int* class_id, std::string* why) {
+// The "class" of an entry: a COCO class, or also "unknown" (a map's unnamed objects) when
+// `allow_unknown`.
+bool ClassOf(const Json& entry, const std::string& where, bool allow_unknown, int* class_id,
+             std::string* why) {
   if (!entry.contains("class") || !entry["class"].is_string()) {
     *why = where + ": \"class\" (a COCO class name) is missing";
     return false;
   }
-  *class_id = CocoClassId(entry["class"].get<std::string>());
+  const std::string name = entry["class"].get<std::string>();
+  *class_id = allow_unknown ? ObjectClassId(name) : CocoClassId(name);
   if (*class_id < 0) {
     *why = where + ": class '" + entry["class"].get<std::string>() + "' is not a COCO class";
     return false;
@@ -80,7 +84,7 @@ bool ReadGroundTruthObject(const Json& entry, const std::string& where, GroundTr
     return false;
   }
   object->id = entry["id"].get<int>();
-  if (!ClassOf(entry, where, &object->class_id, why)) return false;
+  if (!ClassOf(entry, where, /*allow_unknown=*/false, &object->class_id, why)) return false;
   std::vector<double> pose;
   if (!entry.contains("pose") || !Numbers(entry["pose"], 16, &pose)) {
     *why = where + ": \"pose\" must be 16 finite numbers (a 4x4 transform, row by row)";
@@ -172,7 +176,7 @@ bool ReadMappedObject(const Json& entry, const fs::path& dir, const std::string&
     return false;
   }
   object->id = entry["id"].get<ObjectId>();
-  if (!ClassOf(entry, where, &object->class_id, why)) return false;
+  if (!ClassOf(entry, where, /*allow_unknown=*/true, &object->class_id, why)) return false;
   const bool from_map = entry.contains("in_inventory");
   *claimed = entry.value(from_map ? "in_inventory" : "confirmed", false);
   const bool bounds_ok =

@@ -65,10 +65,11 @@ ServiceStatus MapServer::QueryObjects(const ObjectFilter& filter,
                                       std::vector<std::shared_ptr<const ObjectView>>* objects,
                                       std::uint64_t* version) const {
   std::string why;
-  if (filter.class_id && (*filter.class_id < 0 || *filter.class_id >= kNumCocoClasses)) {
+  if (filter.class_id && (*filter.class_id < 0 || *filter.class_id >= kNumObjectClasses)) {
     return ServiceStatus::Invalid("class_id " + std::to_string(*filter.class_id) +
                                   " is not a COCO class (0.." +
-                                  std::to_string(kNumCocoClasses - 1) + ")");
+                                  std::to_string(kNumCocoClasses - 1) + ") nor unknown (" +
+                                  std::to_string(kUnknownClassId) + ")");
   }
   if (filter.region && !ValidateBox(filter.region->first, filter.region->second, "region", &why)) {
     return ServiceStatus::Invalid(why);
@@ -128,7 +129,7 @@ ServiceStatus MapServer::Inventory(std::optional<std::uint64_t> since_version,
                                   std::to_string(snapshot->version) + ")");
   }
   entries->clear();
-  for (int class_id = 0; class_id < kNumCocoClasses; ++class_id) {
+  for (int class_id = 0; class_id < kNumObjectClasses; ++class_id) {
     if (snapshot->class_changed_version[class_id] <= *since_version) continue;
     auto it = std::find_if(snapshot->inventory.begin(), snapshot->inventory.end(),
                            [&](const InventoryEntry& e) { return e.class_id == class_id; });

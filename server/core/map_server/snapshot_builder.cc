@@ -34,11 +34,13 @@ std::shared_ptr<const ObjectView> SnapshotBuilder::MakeView(
 }
 
 void SnapshotBuilder::Touch(int class_id, std::uint64_t version) {
-  if (class_id >= 0 && class_id < kNumCocoClasses) class_changed_version_[class_id] = version;
+  if (class_id == kUnknownClassId && !count_unknown_) return;
+  if (class_id >= 0 && class_id < kNumObjectClasses) class_changed_version_[class_id] = version;
 }
 
 std::shared_ptr<const MapSnapshot> SnapshotBuilder::Build(const Mapper& mapper,
                                                           std::uint64_t version, Diff* diff) {
+  count_unknown_ = mapper.config().inventory.count_unknown;
   // Computed once: confirmation projects every object into every keyframe.
   const std::vector<const MapObject*> confirmed_objects = mapper.ConfirmedObjects();
   std::set<ObjectId> confirmed;
@@ -78,7 +80,7 @@ std::shared_ptr<const MapSnapshot> SnapshotBuilder::Build(const Mapper& mapper,
   }
   views_ = snapshot->objects;
 
-  snapshot->inventory = InventoryOf(confirmed_objects);
+  snapshot->inventory = InventoryOf(confirmed_objects, mapper.config().inventory.count_unknown);
   snapshot->class_changed_version.assign(class_changed_version_.begin(),
                                          class_changed_version_.end());
   if (diff != nullptr) *diff = std::move(local);

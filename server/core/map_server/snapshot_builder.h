@@ -33,7 +33,10 @@ class SnapshotBuilder {
   std::map<ObjectId, std::shared_ptr<const ObjectView>> views_;
   // ObjectMap::ModelKey behind each view's model.
   std::map<ObjectId, std::vector<std::pair<ObjectId, std::uint64_t>>> model_keys_;
-  std::array<std::uint64_t, kNumCocoClasses> class_changed_version_{};
+  std::array<std::uint64_t, kNumObjectClasses> class_changed_version_{};
+  /// Unknown objects are in the inventory (InventoryConfig::count_unknown): their changes are
+  /// inventory changes.
+  bool count_unknown_ = false;
 };
 
 }  // namespace objmap

@@ -698,4 +698,127 @@ std::vector<SegmentedDetection> SegmentDetections(
   return result;
 }
 
+namespace {
+
+// Value at `quantile` (0..1) of `values` (reordered).
+float Quantile(std::vector<float>* values, float quantile) {
+  const std::size_t k = std::min(
+      values->size() - 1, static_cast<std::size_t>(quantile * static_cast<float>(values->size())));
+  std::nth_element(values->begin(), values->begin() + static_cast<std::ptrdiff_t>(k),
+                   values->end());
+  return (*values)[k];
+}
+
+// Depths and extents of a segment are read from its 5th to 95th percentiles: a few flying pixels
+// at its border would otherwise make a mug half a metre tall.
+constexpr float kLowQuantile = 0.05f;
+constexpr float kHighQuantile = 0.95f;
+
+}  // namespace
+
+std::vector<SegmentedDetection> UnclassifiedSegments(
+    const RgbdFrame& frame, const OrganizedCloud& cloud_C, const SegmentationResult& segmentation,
+    const std::vector<Detection>& detections, const std::vector<SegmentedDetection>& detected,
+    KeyframeId keyframe_id, const MapperConfig& config) {
+  const UnknownObjectConfig& unknown = config.unknown_objects;
+  std::vector<SegmentedDetection> result;
+  if (!unknown.enabled || segmentation.num_segments == 0) return result;
+  const SegmentIndex index = IndexSegments(segmentation, cloud_C);
+  if (!index.Matches(segmentation)) return result;
+  const int width = segmentation.width, height = segmentation.height;
+  std::vector<std::uint8_t> claimed(segmentation.labels.size(), 0);
+  for (const SegmentedDetection& entry : detected) {
+    for (int i : entry.pixels) claimed[i] = 1;
+  }
+  struct NamedBox {
+    BoundingBox2D box;  // dilated, depth pixels
+    bool surface = false;
+  };
+  std::vector<NamedBox> boxes;
+  for (const Detection& detection : detections) {
+    if (detection.score < config.min_detection_score || detection.box.Area() <= 0.f) continue;
+    boxes.push_back({DilateDetectionBox(ToDepthPixels(detection.box, frame.color, frame.depth),
+                                        config.detection_segment),
+                     Contains(config.surface_classes, detection.class_id)});
+  }
+  const float sx = frame.color.empty() ? 1.f : static_cast<float>(frame.color.width) / width;
+  const float sy = frame.color.empty() ? 1.f : static_cast<float>(frame.color.height) / height;
+  const int margin = unknown.image_border_px;
+  std::vector<float> heights, xs, ys, zs;
+  for (int s = 0; s < segmentation.num_segments; ++s) {
+    const SegmentIndex::Segment& segment = index.segments[s];
+    if (segmentation.segment_is_plane[s] || segment.pixels < unknown.min_segment_px) continue;
+    // Cut off by the image: a part of something larger, seen whole from elsewhere.
+    if (segment.u_min < margin || segment.v_min < margin || segment.u_max >= width - margin ||
+        segment.v_max >= height - margin) {
+      continue;
+    }
+    const int first = index.offsets[s], last = index.offsets[s + 1];
+    std::vector<int> pixels(index.pixel_ids.begin() + first, index.pixel_ids.begin() + last);
+    int claimed_pixels = 0;
+    for (int i : pixels) claimed_pixels += claimed[i];
+    if (static_cast<float>(claimed_pixels) >
+        unknown.max_claimed_fraction * static_cast<float>(pixels.size())) {
+      continue;
+    }
+    // Inside a named object's box: a part of it. What stands on a table lies in the upper part
+    // of the table's box; its legs and what is under it, in the lower half.
+    const float centre_v = 0.5f * static_cast<float>(segment.v_min + segment.v_max);
+    bool part_of_named = false;
+    for (const NamedBox& named : boxes) {
+      if (named.box.x_max < segment.u_min || named.box.x_min > segment.u_max ||
+          named.box.y_max < segment.v_min || named.box.y_min > segment.v_max) {
+        continue;
+      }
+      int inside = 0;
+      for (int i : pixels) inside += Inside(named.box, i % width, i / width) ? 1 : 0;
+      if (inside * 2 < static_cast<int>(pixels.size())) continue;
+      const float box_middle_v = 0.5f * (named.box.y_min + named.box.y_max);
+      if (!named.surface || centre_v > box_middle_v) {
+        part_of_named = true;
+        break;
+      }
+    }
+    if (part_of_named) continue;
+    const BoundingBox2D box{static_cast<float>(segment.u_min), static_cast<float>(segment.v_min),
+                            static_cast<float>(segment.u_max), static_cast<float>(segment.v_max)};
+    Eigen::Vector3d up;
+    float support_height = 0.f;
+    if (!SupportUpNear(segmentation, cloud_C, index, box, &up, &support_height)) continue;
+    heights.clear();
+    xs.clear();
+    ys.clear();
+    zs.clear();
+    for (int i : pixels) {
+      if (!cloud_C.IsValid(i)) continue;
+      const Eigen::Vector3f& p = cloud_C.points_C[i];
+      heights.push_back(static_cast<float>(up.dot(p.cast<double>())) - support_height);
+      xs.push_back(p.x());
+      ys.push_back(p.y());
+      zs.push_back(p.z());
+    }
+    if (static_cast<int>(heights.size()) < unknown.min_segment_px) continue;
+    // It stands on the support (its foot at the plane's height) and rises above its noise.
+    const float foot = Quantile(&heights, kLowQuantile);
+    const float top = Quantile(&heights, kHighQuantile);
+    if (std::abs(foot) > unknown.max_support_gap_m || top < unknown.min_height_m) continue;
+    const Eigen::Vector3f extent(Quantile(&xs, kHighQuantile) - Quantile(&xs, kLowQuantile),
+                                 Quantile(&ys, kHighQuantile) - Quantile(&ys, kLowQuantile),
+                                 Quantile(&zs, kHighQuantile) - Quantile(&zs, kLowQuantile));
+    const float size = std::max(extent.maxCoeff(), top - foot);
+    if (size < unknown.min_extent_m || size > unknown.max_extent_m) continue;
+    SegmentedDetection entry;
+    entry.observation.segment_C =
+        SegmentPoints(cloud_C, pixels, config.objects.model_voxel_size_m);
+    if (static_cast<int>(entry.observation.segment_C.size()) < config.min_segment_points) continue;
+    entry.observation.keyframe_id = keyframe_id;
+    entry.observation.box = {box.x_min * sx, box.y_min * sy, (box.x_max + 1.f) * sx,
+                             (box.y_max + 1.f) * sy};
+    entry.observation.class_scores = {{kUnknownClassId, 0.f}};
+    entry.pixels = std::move(pixels);
+    result.push_back(std::move(entry));
+  }
+  return result;
+}
+
 }  // namespace objmap

@@ -25,7 +25,7 @@ nlohmann::json ObjectJson(const MapObject& object, bool in_inventory,
   for (const ObjectObservation& observation : object.observations) {
     nlohmann::json classes = nlohmann::json::object();
     for (const auto& [class_id, score] : observation.class_scores) {
-      classes[std::string(CocoClassName(class_id))] = score;
+      classes[std::string(ObjectClassName(class_id))] = score;
     }
     observations.push_back({{"keyframe", observation.keyframe_id},
                             {"box",
@@ -35,7 +35,7 @@ nlohmann::json ObjectJson(const MapObject& object, bool in_inventory,
                             {"points", observation.segment_C.size()}});
   }
   return {{"id", object.id},
-          {"class", std::string(CocoClassName(object.Label()))},
+          {"class", std::string(ObjectClassName(object.Label()))},
           {"confidence", object.Confidence()},
           {"in_inventory", in_inventory},
           {"scores", scores},
@@ -66,7 +66,7 @@ std::string ObjectsJson(const Mapper& mapper) {
   }
   nlohmann::json inventory = nlohmann::json::array();
   for (const InventoryEntry& entry : mapper.Inventory()) {
-    inventory.push_back({{"class", std::string(CocoClassName(entry.class_id))},
+    inventory.push_back({{"class", std::string(ObjectClassName(entry.class_id))},
                          {"count", entry.count},
                          {"mean_confidence", entry.mean_confidence},
                          {"objects", entry.objects}});

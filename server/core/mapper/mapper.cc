@@ -93,8 +93,12 @@ KeyframeRecord MakeRecord(const RgbdFrame& frame,
   return record;
 }
 
+// No object took the observation (AssociateKeyframe).
+constexpr ObjectId kNoObject = 0;
+
 // Assigns one keyframe's segments to objects of `map` (or new ones); the observations are moved
-// into the map. Returns the object that took each observation, in their order.
+// into the map. Returns the object that took each observation, in their order (kNoObject for
+// an unclassified one that matched a named object: dropped).
 std::vector<ObjectId> AssociateKeyframe(ObjectMap* map, Associator* associator,
                                         std::vector<ObjectObservation>* observations,
                                         const Eigen::Isometry3d& T_W_C, KeyframeResult* result) {
@@ -109,6 +113,13 @@ std::vector<ObjectId> AssociateKeyframe(ObjectMap* map, Associator* associator,
   std::vector<ObjectId> targets;
   for (std::size_t s = 0; s < observations->size(); ++s) {
     ObjectObservation observation = std::move((*observations)[s]);
+    // An object-like segment that is part of a named object, in a view where the detector
+    // missed it: its model is the detections' to build, and a miss is not a detection.
+    if (assignment[s] && IsUnclassified(observation) &&
+        map->Find(*assignment[s])->Label() != kUnknownClassId) {
+      targets.push_back(kNoObject);
+      continue;
+    }
     if (assignment[s]) {
       map->AddObservation(*assignment[s], std::move(observation), T_W_C);
       result->updated.push_back(*assignment[s]);
@@ -177,7 +188,28 @@ bool RegenerationConfig::IsValid(std::string* why) const {
   return true;
 }
 
+bool UnknownObjectConfig::IsValid(std::string* why) const {
+  if (min_segment_px < 1 || image_border_px < 0) {
+    *why = "UnknownObjectConfig: min_segment_px must be >= 1 and image_border_px >= 0";
+    return false;
+  }
+  if (!(max_claimed_fraction >= 0.f && max_claimed_fraction <= 1.f)) {
+    *why = "UnknownObjectConfig: max_claimed_fraction must be in [0, 1]";
+    return false;
+  }
+  if (!(max_support_gap_m >= 0.f) || !(min_height_m >= 0.f)) {
+    *why = "UnknownObjectConfig: max_support_gap_m and min_height_m must be >= 0";
+    return false;
+  }
+  if (!(min_extent_m >= 0.f && min_extent_m <= max_extent_m)) {
+    *why = "UnknownObjectConfig: min_extent_m must be >= 0 and <= max_extent_m";
+    return false;
+  }
+  return true;
+}
+
 bool MapperConfig::IsValid(std::string* why) const {
+  if (!unknown_objects.IsValid(why)) return false;
   if (!segmenter.IsValid(why) || !detection_segment.IsValid(why) || !association.IsValid(why) ||
       !objects.IsValid(why) || !occupancy.IsValid(why) || !inventory.IsValid(why) ||
       !reassociation.IsValid(why) || !regeneration.IsValid(why) || !views.IsValid(why)) {
@@ -347,7 +379,9 @@ void Mapper::Impl::Reassociate() {
     KeyframeResult result;
     const std::vector<ObjectId> targets = AssociateKeyframe(
         &replay, &replay_associator, &observations, keyframe->second.T_W_C, &result);
-    for (std::size_t s = 0; s < held.size(); ++s) ++sources[targets[s]][held[s].old_id];
+    for (std::size_t s = 0; s < held.size(); ++s) {
+      if (targets[s] != kNoObject) ++sources[targets[s]][held[s].old_id];
+    }
     MergeDuplicates(&replay, &replay_associator, &result);
     for (const auto& [kept, absorbed] : result.merged) {
       for (const auto& [old_id, count] : sources[absorbed]) sources[kept][old_id] += count;
@@ -503,7 +537,12 @@ bool Mapper::AddKeyframe(const RgbdFrame& frame, const std::vector<Detection>& d
   std::vector<SegmentedDetection> segmented = SegmentDetections(
       frame, cloud_C, segmentation, detections, result->keyframe_id, impl_->config);
   result->detections_used = static_cast<int>(segmented.size());
+  // Unclassified segments stay structure in the OctoMap: the record's mask has the named only.
   KeyframeRecord record = MakeRecord(frame, segmented);
+  std::vector<SegmentedDetection> unclassified = UnclassifiedSegments(
+      frame, cloud_C, segmentation, detections, segmented, result->keyframe_id, impl_->config);
+  result->unclassified_segments = static_cast<int>(unclassified.size());
+  for (SegmentedDetection& entry : unclassified) segmented.push_back(std::move(entry));
   result->timings.segmentation_ms = MillisecondsSince(start);
 
   start = Clock::now();
@@ -638,20 +677,25 @@ std::vector<const MapObject*> Mapper::ConfirmedObjects() const {
   }
   std::vector<const MapObject*> confirmed;
   for (const auto& [id, object] : impl_->objects.objects()) {
+    // An unknown object has no class score to be confident of; its views stand for it.
+    const bool unknown = object.Label() == kUnknownClassId;
     if (static_cast<int>(object.observations.size()) < thresholds.min_observations ||
-        object.Confidence() < thresholds.min_confidence) {
+        (!unknown && object.Confidence() < thresholds.min_confidence)) {
       continue;
     }
     const ObjectEvidence evidence =
         EvidenceOf(object, impl_->VisibilityOf(object), views, thresholds);
+    if (unknown && evidence.views_detecting < thresholds.unknown_min_views) continue;
     if (evidence.evidence >= thresholds.min_evidence) confirmed.push_back(&object);
   }
   return confirmed;
 }
 
-std::vector<InventoryEntry> InventoryOf(const std::vector<const MapObject*>& objects) {
+std::vector<InventoryEntry> InventoryOf(const std::vector<const MapObject*>& objects,
+                                        bool count_unknown) {
   std::map<int, InventoryEntry> by_class;
   for (const MapObject* object : objects) {
+    if (!count_unknown && object->Label() == kUnknownClassId) continue;
     InventoryEntry& entry = by_class[object->Label()];
     entry.class_id = object->Label();
     ++entry.count;
@@ -669,7 +713,9 @@ std::vector<InventoryEntry> InventoryOf(const std::vector<const MapObject*>& obj
   return inventory;
 }
 
-std::vector<InventoryEntry> Mapper::Inventory() const { return InventoryOf(ConfirmedObjects()); }
+std::vector<InventoryEntry> Mapper::Inventory() const {
+  return InventoryOf(ConfirmedObjects(), impl_->config.inventory.count_unknown);
+}
 
 const ObjectMap& Mapper::objects() const { return impl_->objects; }
 const OccupancyMap& Mapper::occupancy() const { return *impl_->occupancy; }

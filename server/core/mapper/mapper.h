@@ -48,6 +48,36 @@ struct RegenerationConfig {
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
 
+/// Objects no detector names: object-like segments that stand on a supporting plane and that no
+/// detection picked become observations of class `unknown` (kUnknownClassId), associated like
+/// any other, so a planner or a manipulator learns that something is there. A later detection
+/// that matches such an object gives it its class. Which of them count (how many views must
+/// have segmented them) is InventoryConfig's. Their pixels stay in the OctoMap as structure:
+/// nothing names them, so a planner keeps avoiding them.
+struct UnknownObjectConfig {
+  bool enabled = true;
+  /// Segments with fewer pixels are left out (a few hundred points make no object model).
+  int min_segment_px = 150;
+  /// Segments within this many pixels of the image border are cut off by the view: a part of
+  /// something larger (a cupboard, a wall's edge) that another view shows whole.
+  int image_border_px = 3;
+  /// Segments that detections of the keyframe took more than this share of are theirs.
+  float max_claimed_fraction = 0.2f;
+  /// Its foot (5th percentile of its heights above the up-facing plane around it) lies within
+  /// this of the plane: it stands there, rather than hanging above or being seen below it.
+  float max_support_gap_m = 0.03f;
+  /// Its top (95th percentile) rises at least this far above the plane: lower is a patch of the
+  /// plane's own depth noise or a flat thing no geometry separates from it.
+  float min_height_m = 0.03f;
+  /// Its largest extent (5th to 95th percentile per camera axis, or its height) lies in this
+  /// range, metres: smaller is noise or a cable, larger is furniture or a wall's part, which a
+  /// detector names or which is structure.
+  float min_extent_m = 0.04f;
+  float max_extent_m = 1.0f;
+
+  [[nodiscard]] bool IsValid(std::string* why) const;
+};
+
 /// The aggregate configuration of the mapping pipeline: one struct per component.
 struct MapperConfig {
   SegmenterConfig segmenter;
@@ -59,6 +89,7 @@ struct MapperConfig {
   ViewGroupingConfig views;
   ReassociationConfig reassociation;
   RegenerationConfig regeneration;
+  UnknownObjectConfig unknown_objects;
   /// Detections scoring lower are ignored.
   float min_detection_score = 0.15f;
   /// Segments with fewer points after model downsampling are dropped (too small to model).
@@ -113,6 +144,8 @@ struct StageTimings {
 struct KeyframeResult {
   KeyframeId keyframe_id = 0;
   int detections_used = 0;  ///< detections that got a 3D segment
+  /// Object-like segments no detection picked, associated as class `unknown` (UnknownObjectConfig).
+  int unclassified_segments = 0;
   std::vector<ObjectId> created;
   std::vector<ObjectId> updated;
   std::vector<std::pair<ObjectId, ObjectId>> merged;  ///< (kept, absorbed)
@@ -128,7 +161,9 @@ struct InventoryEntry {
 };
 
 /// Groups objects by label: count, mean confidence and ids per class, most frequent first.
-[[nodiscard]] std::vector<InventoryEntry> InventoryOf(const std::vector<const MapObject*>& objects);
+/// Unknown objects (kUnknownClassId) are left out unless `count_unknown`.
+[[nodiscard]] std::vector<InventoryEntry> InventoryOf(const std::vector<const MapObject*>& objects,
+                                                      bool count_unknown = false);
 
 /// What a pose update did.
 struct PoseUpdateReport {
@@ -229,7 +264,8 @@ class Mapper {
   /// keyframes added and the objects changed since.
   [[nodiscard]] ObjectEvidence Evidence(const MapObject& object) const;
 
-  /// Objects that pass the inventory thresholds (evidence, confidence), by id.
+  /// Objects that pass the inventory thresholds (evidence, confidence), by id; unknown objects
+  /// among them once enough views segmented them (InventoryConfig::unknown_min_views).
   [[nodiscard]] std::vector<const MapObject*> ConfirmedObjects() const;
   /// Per-class counts of the confirmed objects, most frequent first.
   [[nodiscard]] std::vector<InventoryEntry> Inventory() const;

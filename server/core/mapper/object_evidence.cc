@@ -22,6 +22,10 @@ bool InventoryConfig::IsValid(std::string* why) const {
     *why = "InventoryConfig: occlusion_margin_m and occlusion_margin_per_m2 must be >= 0";
     return false;
   }
+  if (!(unknown_view_score >= 0.f) || unknown_min_views < 1) {
+    *why = "InventoryConfig: unknown_view_score must be >= 0 and unknown_min_views >= 1";
+    return false;
+  }
   if (max_visibility_points < 1) {
     *why = "InventoryConfig: max_visibility_points must be >= 1";
     return false;
@@ -128,8 +132,14 @@ ObjectEvidence EvidenceOf(const MapObject& object,
                           const std::map<KeyframeId, int>& view_of_keyframe,
                           const InventoryConfig& config) {
   // The best score any detection of this object had in each keyframe.
+  const bool unknown = object.Label() == kUnknownClassId;
   std::map<KeyframeId, float> detected;
   for (const ObjectObservation& observation : object.observations) {
+    if (IsUnclassified(observation) != unknown) continue;
+    if (unknown) {
+      detected[observation.keyframe_id] = config.unknown_view_score;
+      continue;
+    }
     float best = 0.f;
     for (const auto& [class_id, score] : observation.class_scores) best = std::max(best, score);
     float& entry = detected[observation.keyframe_id];

@@ -61,6 +61,16 @@ struct InventoryConfig {
   float occlusion_margin_per_m2 = 0.01f;
   /// The visibility of an object is measured on at most this many evenly spaced model points.
   int max_visibility_points = 256;
+  /// Unknown objects (UnknownObjectConfig: segmented, never named): what a view that segmented
+  /// one adds to its evidence, in place of a detection score. Views that could see it and did
+  /// not segment it cost as misses do.
+  float unknown_view_score = 0.5f;
+  /// ... and an unknown object counts only once this many independent views segmented it: a
+  /// thing that persists, not a passing fragment of the segmentation.
+  int unknown_min_views = 3;
+  /// Confirmed unknown objects are counted in the inventory (class "unknown"). Off: they are
+  /// map objects (queries by region or by class "unknown" return them) but not in the counts.
+  bool count_unknown = false;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
@@ -101,7 +111,9 @@ struct ObjectEvidence {
 };
 
 /// The evidence of `object` from its visibility in each keyframe (keyframes missing from
-/// `visibility` saw nothing of it) and the keyframes' independent views.
+/// `visibility` saw nothing of it) and the keyframes' independent views. For a named object
+/// only its detections count as detected (views that only segmented it are misses of the
+/// detector); for an unknown object, its segmentations (unknown_view_score).
 [[nodiscard]] ObjectEvidence EvidenceOf(const MapObject& object,
                                         const std::map<KeyframeId, ObjectVisibility>& visibility,
                                         const std::map<KeyframeId, int>& view_of_keyframe,

@@ -31,14 +31,24 @@ bool ObjectMapConfig::IsValid(std::string* why) const {
   return true;
 }
 
+bool IsUnclassified(const ObjectObservation& observation) {
+  return observation.class_scores.size() == 1 &&
+         observation.class_scores.front().first == kUnknownClassId;
+}
+
 int MapObject::Label() const {
-  return static_cast<int>(std::max_element(accumulated_scores.begin(), accumulated_scores.end()) -
-                          accumulated_scores.begin());
+  const auto best = std::max_element(accumulated_scores.begin(), accumulated_scores.end());
+  if (!(*best > 0.f)) return kUnknownClassId;
+  return static_cast<int>(best - accumulated_scores.begin());
 }
 
 float MapObject::Confidence() const {
-  if (observations.empty()) return 0.f;
-  return accumulated_scores[Label()] / static_cast<float>(observations.size());
+  const int label = Label();
+  if (label == kUnknownClassId) return 0.f;
+  const auto named = std::count_if(observations.begin(), observations.end(),
+                                   [](const ObjectObservation& o) { return !IsUnclassified(o); });
+  if (named == 0) return 0.f;
+  return accumulated_scores[label] / static_cast<float>(named);
 }
 
 std::vector<KeyframeId> MapObject::Keyframes() const {

@@ -31,6 +31,10 @@ struct ObjectObservation {
   std::int64_t view = -1;
 };
 
+/// True when no detection named what the observation shows: an object-like segment of class
+/// kUnknownClassId (score 0), from UnknownObjectConfig.
+[[nodiscard]] bool IsUnclassified(const ObjectObservation& observation);
+
 struct ObjectMapConfig {
   /// Voxel size of the object models, metres (paper: 5 mm).
   float model_voxel_size_m = 0.005f;
@@ -64,9 +68,11 @@ struct MapObject {
   /// another model never shows a version a cache saw before.
   std::uint64_t version = 0;
 
-  /// argmax_c of the accumulated scores.
+  /// argmax_c of the accumulated scores; kUnknownClassId while no detection has named it (only
+  /// unclassified observations).
   [[nodiscard]] int Label() const;
-  /// max_c s_c / n with n the number of observations (paper Sec. III-D).
+  /// max_c s_c / n with n the number of observations that a detection named (paper Sec. III-D;
+  /// a view that only segmented it says nothing of its class); 0 for an unknown object.
   [[nodiscard]] float Confidence() const;
   /// Keyframes that saw this object, ascending, without repeats.
   [[nodiscard]] std::vector<KeyframeId> Keyframes() const;

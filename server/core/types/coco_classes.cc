@@ -52,6 +52,16 @@ int CocoClassId(std::string_view name) {
   return -1;
 }
 
+std::string_view ObjectClassName(int class_id) {
+  if (class_id == kUnknownClassId) return "unknown";
+  return CocoClassName(class_id);
+}
+
+int ObjectClassId(std::string_view name) {
+  if (name == "unknown") return kUnknownClassId;
+  return CocoClassId(name);
+}
+
 std::string CocoClassFileName(int class_id) {
   std::string name(CocoClassName(class_id));
   for (char& c : name) {
