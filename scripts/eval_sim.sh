@@ -90,7 +90,7 @@ def inventory(path):
         objects = json.load(f)["objects"]
     counts = {}
     for o in objects:
-        if o.get("in_inventory"):
+        if o.get("in_inventory") and o["class"] != "unknown":
             counts[o["class"]] = counts.get(o["class"], 0) + 1
     return counts
 print(f"detector {detector}; one line per scene and keyframe policy")
@@ -98,6 +98,7 @@ print(f"{'scene':<14}{'policy':<8}{'keyframes':>9}" + "".join(f"{k[:5]:>7}" for 
       f"{'prec':>7}{'recall':>7}{'acc cm':>8}")
 pooled = {p: {k: 0 for k in keys} for p in policies}
 accuracies = {p: [] for p in policies}
+unknown = {p: {"mapped": 0, "on_real": 0, "on_missed": 0} for p in policies}
 inventories = {}
 for kind in kinds:
     for seed in seeds:
@@ -110,6 +111,8 @@ for kind in kinds:
             a = e["all"]
             for k in keys:
                 pooled[policy][k] += a[k]
+            for k in unknown[policy]:
+                unknown[policy][k] += e.get("unknown_objects", {}).get(k, 0)
             acc = e.get("mean_model_to_surface_m", -1)
             for m in e.get("matches", []):
                 if m["model_to_surface_m"] >= 0:
@@ -132,6 +135,12 @@ for policy in policies:
     acc = sum(accuracies[policy]) / max(1, len(accuracies[policy]))
     print(f"{policy:<8}" + "".join(f"{p[k]:>7}" for k in keys) +
           f"{prec:>7.3f}{rec:>7.3f}{100 * dm:>7.1f}%{100 * acc:>8.2f}")
+print()
+print("unknown objects (segmented, never named; not in the figures above)")
+for policy in policies:
+    u = unknown[policy]
+    print(f"{policy:<8} {u['mapped']} confirmed, {u['on_real']} on a real object, "
+          f"{u['on_missed']} on one the named objects missed")
 if len(policies) > 1:
     print()
     print(f"inventory differences against {policies[0]} (objects added or missing, per scene)")

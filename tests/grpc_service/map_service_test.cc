@@ -67,10 +67,12 @@ class MapServiceTest : public ::testing::Test {
     for (const char* suffix : {"", "-wal", "-shm"}) std::remove((db_path_ + suffix).c_str());
   }
 
-  // A table with a cup, seen from viewpoint `view`, with the cup's detection.
-  v1::AddKeyframeRequest Keyframe(int view) const {
-    const std::vector<SceneBox> boxes = {{{-0.6, -0.8, 0.60}, {0.6, 0.8, 0.70}, {150, 100, 60}},
-                                         {{-0.05, -0.05, 0.70}, {0.05, 0.05, 0.82}, {200, 30, 30}}};
+  // A table with a cup, seen from viewpoint `view`, with the cup's detection; with
+  // `unnamed_box`, also a box beside the cup that nothing detects.
+  v1::AddKeyframeRequest Keyframe(int view, bool unnamed_box = false) const {
+    std::vector<SceneBox> boxes = {{{-0.6, -0.8, 0.60}, {0.6, 0.8, 0.70}, {150, 100, 60}},
+                                   {{-0.05, -0.05, 0.70}, {0.05, 0.05, 0.82}, {200, 30, 30}}};
+    if (unnamed_box) boxes.push_back({{0.1, 0.2, 0.70}, {0.22, 0.3, 0.80}, {40, 160, 40}});
     const Eigen::Isometry3d T_W_C =
         testing::LookAt({-1.0, 0.1 * view, 1.3}, Eigen::Vector3d(0, 0, 0.7));
     const RgbdFrame frame = testing::RenderFrame(boxes, K_, T_W_C, "view-" + std::to_string(view));
@@ -126,6 +128,31 @@ TEST_F(MapServiceTest, AddedKeyframeMakesAQueryableObject) {
   EXPECT_EQ(object.points_xyz().size(), 12u * object.num_points());
 }
 
+TEST_F(MapServiceTest, AThingNoDetectionNamesIsQueryableAsUnknownAndOutOfTheInventory) {
+  v1::AddKeyframeResponse added;
+  const grpc::Status status = Add(Keyframe(0, /*unnamed_box=*/true), &added);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(added.created_objects_size(), 2) << "the cup and the unnamed box";
+
+  grpc::ClientContext context;
+  v1::QueryObjectsRequest query;
+  query.set_class_name("unknown");
+  query.set_include_unconfirmed(true);  // one view is not yet persistence
+  v1::QueryObjectsResponse objects;
+  ASSERT_TRUE(stub_->QueryObjects(&context, query, &objects).ok());
+  ASSERT_EQ(objects.objects_size(), 1);
+  EXPECT_EQ(objects.objects(0).class_name(), "unknown");
+  EXPECT_EQ(objects.objects(0).class_id(), kUnknownClassId);
+  EXPECT_EQ(objects.objects(0).scores_size(), 0);
+  EXPECT_NEAR(objects.objects(0).centroid().y(), 0.25, 0.04);
+
+  grpc::ClientContext inventory_context;
+  v1::InventoryRequest inventory_request;
+  v1::InventoryResponse inventory;
+  ASSERT_TRUE(stub_->Inventory(&inventory_context, inventory_request, &inventory).ok());
+  for (const auto& entry : inventory.entries()) EXPECT_NE(entry.class_name(), "unknown");
+}
+
 TEST_F(MapServiceTest, BadRequestsGetTheirCodeAndNameTheField) {
   grpc::ClientContext get_context;
   v1::GetObjectRequest get;
@@ -139,7 +166,8 @@ TEST_F(MapServiceTest, BadRequestsGetTheirCodeAndNameTheField) {
   v1::QueryObjectsResponse objects;
   const grpc::Status unicorn = stub_->QueryObjects(&query_context, query, &objects);
   EXPECT_EQ(unicorn.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
-  EXPECT_EQ(unicorn.error_message(), "class_name 'unicorn' is neither a COCO class nor \"unknown\"");
+  EXPECT_EQ(unicorn.error_message(),
+            "class_name 'unicorn' is neither a COCO class nor \"unknown\"");
 
   grpc::ClientContext free_context;
   v1::IsFreeRequest is_free;

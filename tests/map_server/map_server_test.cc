@@ -61,7 +61,8 @@ class MapServerScene : public ::testing::Test {
 
   void IngestAllViews(MapServer* server) const {
     for (int view = 0; view < 3; ++view) {
-      RgbdFrame frame = testing::RenderFrame(boxes_, K_, Pose(view), "view-" + std::to_string(view));
+      RgbdFrame frame =
+          testing::RenderFrame(boxes_, K_, Pose(view), "view-" + std::to_string(view));
       AddKeyframeOutcome outcome;
       const ServiceStatus status = server->AddKeyframe(frame, CupDetections(view), &outcome);
       ASSERT_TRUE(status.ok()) << status.message;
@@ -192,6 +193,52 @@ TEST_F(MapServerScene, QueriesByClassRegionAndNearest) {
   EXPECT_EQ(inventory[0].count, 2);
 }
 
+// A box on the table that nothing detects: an unknown object the queries return (by class
+// "unknown" and by region), outside the inventory and its changes, and kept over a restart.
+TEST_F(MapServerScene, AnUnnamedThingIsAnUnknownObjectThatSurvivesARestart) {
+  boxes_.push_back({{0.15, -0.05, 0.70}, {0.27, 0.05, 0.80}, {40, 160, 40}});
+  ObjectFilter unknown;
+  unknown.class_id = kUnknownClassId;
+  std::vector<std::shared_ptr<const ObjectView>> found;
+  std::uint64_t version = 0;
+  ObjectId unknown_id = 0;
+  {
+    auto server = OpenServer();
+    ASSERT_TRUE(server);
+    IngestAllViews(server.get());
+    ASSERT_TRUE(server->QueryObjects(unknown, &found, &version).ok());
+    ASSERT_EQ(found.size(), 1u);
+    EXPECT_TRUE(found[0]->confirmed);
+    EXPECT_EQ(found[0]->observations, 3);
+    EXPECT_TRUE(found[0]->scores.empty());
+    unknown_id = found[0]->id;
+
+    ObjectFilter region;
+    region.region = {{0.1, -0.1, 0.6}, {0.35, 0.1, 1.0}};
+    ASSERT_TRUE(server->QueryObjects(region, &found, &version).ok());
+    ASSERT_EQ(found.size(), 1u);
+    EXPECT_EQ(found[0]->id, unknown_id);
+
+    std::vector<InventoryEntry> inventory;
+    ASSERT_TRUE(server->Inventory(std::nullopt, &inventory, &version).ok());
+    ASSERT_EQ(inventory.size(), 1u);
+    EXPECT_EQ(inventory[0].class_id, kCup);
+    ASSERT_TRUE(server->Inventory(std::uint64_t{0}, &inventory, &version).ok());
+    for (const InventoryEntry& entry : inventory) EXPECT_NE(entry.class_id, kUnknownClassId);
+  }
+  auto server = OpenServer();
+  ASSERT_TRUE(server);
+  ASSERT_TRUE(server->QueryObjects(unknown, &found, &version).ok());
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_EQ(found[0]->id, unknown_id);
+  EXPECT_EQ(found[0]->observations, 3);
+
+  unknown.class_id = kUnknownClassId + 1;
+  const ServiceStatus bad = server->QueryObjects(unknown, &found, &version);
+  EXPECT_EQ(bad.code, StatusCode::kInvalidArgument);
+  EXPECT_NE(bad.message.find("nor unknown (80)"), std::string::npos) << bad.message;
+}
+
 TEST_F(MapServerScene, ARayStoppedByTheStructureOnACupsSurfaceNamesTheCup) {
   auto server = OpenServer();
   ASSERT_TRUE(server);
@@ -222,9 +269,9 @@ TEST_F(MapServerScene, ARayStoppedByTheStructureOnACupsSurfaceNamesTheCup) {
   ObjectId object_hit = -1;
   std::uint64_t version = 0;
   const Eigen::Vector3d table_point(-0.3, 0.0, 0.70);
-  ASSERT_TRUE(server->CastRay(eyes_[0], table_point - eyes_[0], 5.0, false, &hit, &object_hit,
-                              &version)
-                  .ok());
+  ASSERT_TRUE(
+      server->CastRay(eyes_[0], table_point - eyes_[0], 5.0, false, &hit, &object_hit, &version)
+          .ok());
   EXPECT_TRUE(hit.hit);
   EXPECT_EQ(object_hit, 0);
 }
@@ -387,9 +434,10 @@ TEST_F(MapServerScene, PoseUpdateMovesObjectsAndOccupancy) {
   // Cups are objects, not OctoMap voxels: a box around one is not free even for a planner that
   // takes unknown space as free, and the answer names the cup.
   std::vector<ObjectId> objects_inside;
-  ASSERT_TRUE(server->IsFree(boxes_[1].lo - Eigen::Vector3d::Constant(0.01),
-                             boxes_[1].hi + Eigen::Vector3d::Constant(0.01), true, &free, &counts,
-                             &objects_inside, &version)
+  ASSERT_TRUE(server
+                  ->IsFree(boxes_[1].lo - Eigen::Vector3d::Constant(0.01),
+                           boxes_[1].hi + Eigen::Vector3d::Constant(0.01), true, &free, &counts,
+                           &objects_inside, &version)
                   .ok());
   EXPECT_FALSE(free);
   ASSERT_EQ(objects_inside.size(), 1u);
@@ -397,8 +445,8 @@ TEST_F(MapServerScene, PoseUpdateMovesObjectsAndOccupancy) {
   const ObjectId cup_at_negative_y =
       before[0]->centroid_W.y() < 0.f ? before[0]->id : before[1]->id;
   EXPECT_EQ(objects_inside[0], cup_at_negative_y);
-  ASSERT_TRUE(server->IsFree(air_min, air_max, true, &free, &counts, &objects_inside, &version)
-                  .ok());
+  ASSERT_TRUE(
+      server->IsFree(air_min, air_max, true, &free, &counts, &objects_inside, &version).ok());
   EXPECT_TRUE(free);
   EXPECT_TRUE(objects_inside.empty());
 
@@ -443,9 +491,10 @@ TEST_F(MapServerScene, PoseUpdateMovesObjectsAndOccupancy) {
   }
   // The table top moved with the poses.
   const Eigen::Vector3d moved_table = G * Eigen::Vector3d(-0.25, 0.0, 0.70);
-  ASSERT_TRUE(server->IsFree(moved_table - Eigen::Vector3d::Constant(0.03),
-                             moved_table + Eigen::Vector3d::Constant(0.03), false, &free, &counts,
-                             nullptr, &version)
+  ASSERT_TRUE(server
+                  ->IsFree(moved_table - Eigen::Vector3d::Constant(0.03),
+                           moved_table + Eigen::Vector3d::Constant(0.03), false, &free, &counts,
+                           nullptr, &version)
                   .ok());
   EXPECT_GT(counts.occupied, 0u);
 

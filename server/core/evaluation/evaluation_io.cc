@@ -109,8 +109,8 @@ bool ReadGroundTruthObject(const Json& entry, const std::string& where, GroundTr
       *why = where + ": \"visible_frames\" must be an integer >= 0";
       return false;
     }
-    object->visible_frames = static_cast<int>(std::min<long long>(frames.get<long long>(),
-                                                                  std::numeric_limits<int>::max()));
+    object->visible_frames = static_cast<int>(
+        std::min<long long>(frames.get<long long>(), std::numeric_limits<int>::max()));
   }
   if (entry.contains("surface_sample")) {
     const Json& sample = entry["surface_sample"];
@@ -166,9 +166,9 @@ bool ReadGroundTruthObject(const Json& entry, const std::string& where, GroundTr
   return true;
 }
 
-// One object of objects.json: from `objmap map` ("in_inventory", "bbox_min"/"bbox_max") or from
-// `objmap export` ("confirmed", "bounds": {"min", "max"}, "ply"). `claimed` false: not one the
-// map lists in its inventory.
+// One object of objects.json: from `objmap map` ("confirmed", "in_inventory",
+// "bbox_min"/"bbox_max") or from `objmap export` ("confirmed", "bounds": {"min", "max"}, "ply").
+// `claimed` false: not one the map lists in its inventory.
 bool ReadMappedObject(const Json& entry, const fs::path& dir, const std::string& where,
                       MappedObject* object, bool* claimed, std::string* why) {
   if (!entry.is_object() || !entry.contains("id") || !entry["id"].is_number_integer()) {
@@ -178,7 +178,9 @@ bool ReadMappedObject(const Json& entry, const fs::path& dir, const std::string&
   object->id = entry["id"].get<ObjectId>();
   if (!ClassOf(entry, where, /*allow_unknown=*/true, &object->class_id, why)) return false;
   const bool from_map = entry.contains("in_inventory");
-  *claimed = entry.value(from_map ? "in_inventory" : "confirmed", false);
+  // Confirmed objects are the map's claims, unknown ones too (they are counted apart); older
+  // `objmap map` outputs mark only "in_inventory".
+  *claimed = entry.value("confirmed", from_map && entry.value("in_inventory", false));
   const bool bounds_ok =
       Vector3(entry.value("centroid", Json()), &object->centroid_W) &&
       (from_map ? Vector3(entry.value("bbox_min", Json()), &object->min_W) &&

@@ -13,7 +13,9 @@ namespace {
 
 nlohmann::json Vector(const Eigen::Vector3f& v) { return {v.x(), v.y(), v.z()}; }
 
-nlohmann::json ObjectJson(const MapObject& object, bool in_inventory,
+// `confirmed`: it passed the inventory's thresholds; `in_inventory`: it is also counted there
+// (unknown objects are confirmed but counted only with InventoryConfig::count_unknown).
+nlohmann::json ObjectJson(const MapObject& object, bool confirmed, bool in_inventory,
                           const ObjectEvidence& evidence) {
   nlohmann::json scores = nlohmann::json::object();
   for (int c = 0; c < kNumCocoClasses; ++c) {
@@ -37,6 +39,7 @@ nlohmann::json ObjectJson(const MapObject& object, bool in_inventory,
   return {{"id", object.id},
           {"class", std::string(ObjectClassName(object.Label()))},
           {"confidence", object.Confidence()},
+          {"confirmed", confirmed},
           {"in_inventory", in_inventory},
           {"scores", scores},
           {"evidence", evidence.evidence},
@@ -62,7 +65,10 @@ std::string ObjectsJson(const Mapper& mapper) {
   const std::set<ObjectId> confirmed = ConfirmedIds(mapper);
   nlohmann::json objects = nlohmann::json::array();
   for (const auto& [id, object] : mapper.objects().objects()) {
-    objects.push_back(ObjectJson(object, confirmed.count(id) > 0, mapper.Evidence(object)));
+    const bool is_confirmed = confirmed.count(id) > 0;
+    const bool counted = is_confirmed && (object.Label() != kUnknownClassId ||
+                                          mapper.config().inventory.count_unknown);
+    objects.push_back(ObjectJson(object, is_confirmed, counted, mapper.Evidence(object)));
   }
   nlohmann::json inventory = nlohmann::json::array();
   for (const InventoryEntry& entry : mapper.Inventory()) {
