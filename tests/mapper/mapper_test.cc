@@ -892,6 +892,41 @@ TEST_F(MapperScene, OnlyFreeStandingUnnamedThingsBecomeUnknownObjects) {
       << "the missed cup's segment is not an observation of it";
 }
 
+// On a floor, undetected: a stool (a seat plate on four legs) and a step made of two blocks side
+// by side. The stool's legs hold up its seat: parts of furniture, no unknown objects. The step's
+// blocks meet at a concave edge, two segments: one thing, one unknown object.
+TEST(UnknownObjects, LegsUnderASurfaceAreNoObjectsAndTouchingPartsAreOne) {
+  const std::vector<SceneBox> boxes = {
+      {{-3.0, -3.0, -0.1}, {3.0, 3.0, 0.0}, {120, 120, 120}},     // floor
+      {{2.0, -3.0, 0.0}, {2.1, 3.0, 2.5}, {220, 220, 220}},       // wall
+      {{0.3, -0.6, 0.45}, {0.7, -0.2, 0.48}, {160, 110, 60}},     // stool seat
+      {{0.32, -0.58, 0.0}, {0.35, -0.55, 0.45}, {90, 60, 30}},    // its legs
+      {{0.65, -0.58, 0.0}, {0.68, -0.55, 0.45}, {90, 60, 30}},
+      {{0.32, -0.25, 0.0}, {0.35, -0.22, 0.45}, {90, 60, 30}},
+      {{0.65, -0.25, 0.0}, {0.68, -0.22, 0.45}, {90, 60, 30}},
+      {{0.4, 0.3, 0.0}, {0.7, 0.5, 0.1}, {200, 60, 60}},          // step: low block
+      {{0.55, 0.5, 0.0}, {0.7, 0.7, 0.25}, {60, 60, 200}},        // ... and the high one
+  };
+  const CameraIntrinsics K;
+  const std::vector<Eigen::Vector3d> eyes = {{-1.2, 0.0, 1.3}, {-1.1, 0.4, 1.3}, {-1.1, -0.4, 1.35}};
+  Mapper mapper{MapperConfig{}};
+  for (std::size_t view = 0; view < eyes.size(); ++view) {
+    const Eigen::Isometry3d T_W_C = testing::LookAt(eyes[view], Eigen::Vector3d(0.5, 0.0, 0.2));
+    KeyframeResult result;
+    std::string why;
+    ASSERT_TRUE(mapper.AddKeyframe(
+        testing::RenderFrame(boxes, K, T_W_C, "floor-" + std::to_string(view)), {}, &result, &why))
+        << why;
+    EXPECT_EQ(result.unclassified_segments, 1) << "view " << view << ": the step alone";
+  }
+  const auto unknown = ObjectsLabelled(mapper, kUnknownClassId);
+  ASSERT_EQ(unknown.size(), 1u);
+  EXPECT_EQ(unknown[0]->observations.size(), 3u);
+  EXPECT_GT(unknown[0]->min_W.y(), 0.25) << "the step, not the stool";
+  EXPECT_LT(unknown[0]->min_W.y(), 0.35) << "both blocks";
+  EXPECT_GT(unknown[0]->max_W.y(), 0.65) << "both blocks";
+}
+
 TEST_F(MapperScene, BadInputIsRejectedAndChangesNothing) {
   Mapper mapper{MapperConfig{}};
   std::string why;

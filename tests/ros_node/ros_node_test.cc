@@ -401,6 +401,15 @@ TEST_F(RosNode, ObjectsByClassAreTheGrpcServers) {
       EXPECT_NEAR(node[i].confidence, grpc[i].confidence(), 1e-3);
     }
   }
+  // Objects no detection named are asked for as "unknown" on both (and are in no inventory).
+  const std::vector<objmap_msgs::Object> node_unknown = NodeObjects("unknown");
+  const std::vector<v1::Object> grpc_unknown = GrpcObjects("unknown");
+  ASSERT_EQ(node_unknown.size(), grpc_unknown.size());
+  for (std::size_t i = 0; i < node_unknown.size(); ++i) {
+    EXPECT_EQ(node_unknown[i].id, grpc_unknown[i].id());
+    EXPECT_EQ(node_unknown[i].class_name, "unknown");
+  }
+  std::cout << node_unknown.size() << " unknown object(s)" << std::endl;
   // With the model on request: a PointCloud2 of the 5 mm model.
   const std::vector<objmap_msgs::Object> tables = NodeObjects("dining table", true);
   ASSERT_EQ(tables.size(), 1u);

@@ -3,9 +3,11 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <map>
 #include <numeric>
+#include <optional>
 
 #include "segmentation/segment_index.h"
 
@@ -744,7 +746,24 @@ std::vector<SegmentedDetection> UnclassifiedSegments(
   const float sx = frame.color.empty() ? 1.f : static_cast<float>(frame.color.width) / width;
   const float sy = frame.color.empty() ? 1.f : static_cast<float>(frame.color.height) / height;
   const int margin = unknown.image_border_px;
-  std::vector<float> heights, xs, ys, zs;
+  // Up-facing planes, fitted once each when a candidate first meets them (nullopt: not up-facing).
+  std::map<int, std::optional<PlaneFit>> plane_fits;
+  auto up_facing_plane = [&](int p) -> const std::optional<PlaneFit>& {
+    auto it = plane_fits.find(p);
+    if (it != plane_fits.end()) return it->second;
+    PlaneFit fit;
+    std::optional<PlaneFit> result;
+    if (FitPlane(cloud_C, index, p, &fit) && fit.UpFacing() > kMinUpFacing) result = fit;
+    return plane_fits.emplace(p, std::move(result)).first->second;
+  };
+  struct Candidate {
+    int segment = -1;
+    Eigen::Vector3d up = Eigen::Vector3d::Zero();
+    float support_height = 0.f;
+  };
+  std::vector<Candidate> candidates;
+  std::vector<int> candidate_of(segmentation.num_segments, -1);
+  std::vector<float> heights;
   for (int s = 0; s < segmentation.num_segments; ++s) {
     const SegmentIndex::Segment& segment = index.segments[s];
     if (segmentation.segment_is_plane[s] || segment.pixels < unknown.min_segment_px) continue;
@@ -754,11 +773,10 @@ std::vector<SegmentedDetection> UnclassifiedSegments(
       continue;
     }
     const int first = index.offsets[s], last = index.offsets[s + 1];
-    std::vector<int> pixels(index.pixel_ids.begin() + first, index.pixel_ids.begin() + last);
     int claimed_pixels = 0;
-    for (int i : pixels) claimed_pixels += claimed[i];
+    for (int k = first; k < last; ++k) claimed_pixels += claimed[index.pixel_ids[k]];
     if (static_cast<float>(claimed_pixels) >
-        unknown.max_claimed_fraction * static_cast<float>(pixels.size())) {
+        unknown.max_claimed_fraction * static_cast<float>(last - first)) {
       continue;
     }
     // Inside a named object's box: a part of it. What stands on a table lies in the upper part
@@ -771,8 +789,11 @@ std::vector<SegmentedDetection> UnclassifiedSegments(
         continue;
       }
       int inside = 0;
-      for (int i : pixels) inside += Inside(named.box, i % width, i / width) ? 1 : 0;
-      if (inside * 2 < static_cast<int>(pixels.size())) continue;
+      for (int k = first; k < last; ++k) {
+        const int i = index.pixel_ids[k];
+        inside += Inside(named.box, i % width, i / width) ? 1 : 0;
+      }
+      if (inside * 2 < last - first) continue;
       const float box_middle_v = 0.5f * (named.box.y_min + named.box.y_max);
       if (!named.surface || centre_v > box_middle_v) {
         part_of_named = true;
@@ -782,9 +803,98 @@ std::vector<SegmentedDetection> UnclassifiedSegments(
     if (part_of_named) continue;
     const BoundingBox2D box{static_cast<float>(segment.u_min), static_cast<float>(segment.v_min),
                             static_cast<float>(segment.u_max), static_cast<float>(segment.v_max)};
-    Eigen::Vector3d up;
-    float support_height = 0.f;
-    if (!SupportUpNear(segmentation, cloud_C, index, box, &up, &support_height)) continue;
+    Candidate candidate;
+    candidate.segment = s;
+    if (!SupportUpNear(segmentation, cloud_C, index, box, &candidate.up,
+                       &candidate.support_height)) {
+      continue;
+    }
+    heights.clear();
+    for (int k = first; k < last; ++k) {
+      const int i = index.pixel_ids[k];
+      if (!cloud_C.IsValid(i)) continue;
+      heights.push_back(static_cast<float>(candidate.up.dot(cloud_C.points_C[i].cast<double>())) -
+                        candidate.support_height);
+    }
+    if (static_cast<int>(heights.size()) < unknown.min_segment_px) continue;
+    // It stands on the support (its foot at the plane's height) and rises above its noise.
+    const float foot = Quantile(&heights, kLowQuantile);
+    const float top = Quantile(&heights, kHighQuantile);
+    if (std::abs(foot) > unknown.max_support_gap_m || top < unknown.min_height_m) continue;
+    // A leg holds up a surface: in the image, an up-facing plane at or above its top continues
+    // it upwards (where the surface meets it, or hides the rest of it). A part of the
+    // furniture (a table, a stool, a chair's seat), which the surface's own object names.
+    bool under_a_surface = false;
+    for (int k = first; k < last && !under_a_surface; ++k) {
+      const int i = index.pixel_ids[k];
+      if (i < width) continue;
+      const int label = segmentation.labels[i - width];
+      if (label < 0 || label == s || !segmentation.segment_is_plane[label]) continue;
+      const std::optional<PlaneFit>& plane = up_facing_plane(label);
+      if (!plane) continue;
+      const float plane_height =
+          static_cast<float>(candidate.up.dot(plane->centre)) - candidate.support_height;
+      under_a_surface = plane_height > unknown.min_height_m &&
+                        plane_height >= top - unknown.max_support_gap_m;
+    }
+    if (under_a_surface) continue;
+    // Hidden along a third or more of its top edge by something nearer (the far legs of a stool
+    // behind its seat, a mug behind a box): like a segment at the image border, only a part of
+    // it is in view.
+    int top_edge = 0, hidden_top_edge = 0;
+    for (int k = first; k < last; ++k) {
+      const int i = index.pixel_ids[k];
+      if (i < width || segmentation.labels[i - width] == s || !cloud_C.IsValid(i)) continue;
+      ++top_edge;
+      const float z = cloud_C.points_C[i].z();
+      const float z_above = cloud_C.IsValid(i - width) ? cloud_C.points_C[i - width].z() : z;
+      if (z_above < z * (1.f - config.segmenter.depth_jump_ratio)) ++hidden_top_edge;
+    }
+    if (hidden_top_edge * 3 > top_edge) continue;
+    candidate_of[s] = static_cast<int>(candidates.size());
+    candidates.push_back(candidate);
+  }
+  if (candidates.empty()) return result;
+
+  // Candidates that meet in the image with continuous depth are parts of one thing (the seat,
+  // back and legs of a chair nobody named): one observation, not one per part.
+  std::vector<int> group(candidates.size());
+  std::iota(group.begin(), group.end(), 0);
+  std::function<int(int)> root = [&](int c) { return group[c] == c ? c : group[c] = root(group[c]); };
+  for (int v = 0; v < height; ++v) {
+    for (int u = 0; u < width; ++u) {
+      const int i = v * width + u;
+      const int a = segmentation.labels[i];
+      if (a < 0 || candidate_of[a] < 0 || !cloud_C.IsValid(i)) continue;
+      for (const int j : {u + 1 < width ? i + 1 : -1, v + 1 < height ? i + width : -1}) {
+        if (j < 0) continue;
+        const int b = segmentation.labels[j];
+        if (b < 0 || b == a || candidate_of[b] < 0 || !cloud_C.IsValid(j)) continue;
+        const float z_a = cloud_C.points_C[i].z(), z_b = cloud_C.points_C[j].z();
+        if (std::abs(z_a - z_b) > config.segmenter.depth_jump_ratio * std::min(z_a, z_b)) continue;
+        group[root(candidate_of[a])] = root(candidate_of[b]);
+      }
+    }
+  }
+  std::map<int, std::vector<int>> members;  // root -> candidates, ascending
+  for (int c = 0; c < static_cast<int>(candidates.size()); ++c) members[root(c)].push_back(c);
+
+  std::vector<float> xs, ys, zs;
+  for (const auto& [group_root, parts] : members) {
+    std::vector<int> pixels;
+    BoundingBox2D box{static_cast<float>(width), static_cast<float>(height), 0.f, 0.f};
+    for (int c : parts) {
+      const int s = candidates[c].segment;
+      pixels.insert(pixels.end(), index.pixel_ids.begin() + index.offsets[s],
+                    index.pixel_ids.begin() + index.offsets[s + 1]);
+      const SegmentIndex::Segment& segment = index.segments[s];
+      box.x_min = std::min(box.x_min, static_cast<float>(segment.u_min));
+      box.y_min = std::min(box.y_min, static_cast<float>(segment.v_min));
+      box.x_max = std::max(box.x_max, static_cast<float>(segment.u_max));
+      box.y_max = std::max(box.y_max, static_cast<float>(segment.v_max));
+    }
+    std::sort(pixels.begin(), pixels.end());
+    const Candidate& first = candidates[parts.front()];
     heights.clear();
     xs.clear();
     ys.clear();
@@ -792,20 +902,17 @@ std::vector<SegmentedDetection> UnclassifiedSegments(
     for (int i : pixels) {
       if (!cloud_C.IsValid(i)) continue;
       const Eigen::Vector3f& p = cloud_C.points_C[i];
-      heights.push_back(static_cast<float>(up.dot(p.cast<double>())) - support_height);
+      heights.push_back(static_cast<float>(first.up.dot(p.cast<double>())) -
+                        first.support_height);
       xs.push_back(p.x());
       ys.push_back(p.y());
       zs.push_back(p.z());
     }
-    if (static_cast<int>(heights.size()) < unknown.min_segment_px) continue;
-    // It stands on the support (its foot at the plane's height) and rises above its noise.
-    const float foot = Quantile(&heights, kLowQuantile);
-    const float top = Quantile(&heights, kHighQuantile);
-    if (std::abs(foot) > unknown.max_support_gap_m || top < unknown.min_height_m) continue;
+    const float rise = Quantile(&heights, kHighQuantile) - Quantile(&heights, kLowQuantile);
     const Eigen::Vector3f extent(Quantile(&xs, kHighQuantile) - Quantile(&xs, kLowQuantile),
                                  Quantile(&ys, kHighQuantile) - Quantile(&ys, kLowQuantile),
                                  Quantile(&zs, kHighQuantile) - Quantile(&zs, kLowQuantile));
-    const float size = std::max(extent.maxCoeff(), top - foot);
+    const float size = std::max(extent.maxCoeff(), rise);
     if (size < unknown.min_extent_m || size > unknown.max_extent_m) continue;
     SegmentedDetection entry;
     entry.observation.segment_C =
