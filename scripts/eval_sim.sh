@@ -98,7 +98,7 @@ print(f"{'scene':<14}{'policy':<8}{'keyframes':>9}" + "".join(f"{k[:5]:>7}" for 
       f"{'prec':>7}{'recall':>7}{'acc cm':>8}")
 pooled = {p: {k: 0 for k in keys} for p in policies}
 accuracies = {p: [] for p in policies}
-unknown = {p: {"mapped": 0, "on_real": 0, "on_missed": 0} for p in policies}
+unknown = {p: {"mapped": 0, "on_real": 0, "on_missed": 0, "missed_marked": 0} for p in policies}
 inventories = {}
 for kind in kinds:
     for seed in seeds:
@@ -140,7 +140,8 @@ print("unknown objects (segmented, never named; not in the figures above)")
 for policy in policies:
     u = unknown[policy]
     print(f"{policy:<8} {u['mapped']} confirmed, {u['on_real']} on a real object, "
-          f"{u['on_missed']} on one the named objects missed")
+          f"{u['on_missed']} on one the named objects missed; "
+          f"{u['missed_marked']} of the {pooled[policy]['fn']} missed objects marked by one")
 if len(policies) > 1:
     print()
     print(f"inventory differences against {policies[0]} (objects added or missing, per scene)")

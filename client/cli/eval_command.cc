@@ -131,16 +131,11 @@ void PrintTable(const std::map<int, ClassCounts>& per_class, const ClassCounts& 
 }
 
 nlohmann::ordered_json CountsJson(const ClassCounts& c) {
-  return {{"real", c.real},
-          {"mapped", c.mapped},
-          {"tp", c.true_positives},
-          {"fp", c.false_positives},
-          {"fn", c.misses},
-          {"duplicates", c.duplicates},
-          {"merges", c.merges},
-          {"wrong_labels", c.wrong_labels},
-          {"unseen", c.unseen},
-          {"precision", c.Precision()},
+  return {{"real", c.real},         {"mapped", c.mapped},
+          {"tp", c.true_positives}, {"fp", c.false_positives},
+          {"fn", c.misses},         {"duplicates", c.duplicates},
+          {"merges", c.merges},     {"wrong_labels", c.wrong_labels},
+          {"unseen", c.unseen},     {"precision", c.Precision()},
           {"recall", c.Recall()}};
 }
 
@@ -232,7 +227,8 @@ int EvaluateWithGroundTruth(const std::vector<MappedObject>& mapped, const std::
     document["mean_model_to_surface_m"] = evaluation.mean_model_to_surface_m;
     document["unknown_objects"] = {{"mapped", evaluation.unknown.mapped},
                                    {"on_real", evaluation.unknown.on_real},
-                                   {"on_missed", evaluation.unknown.on_missed}};
+                                   {"on_missed", evaluation.unknown.on_missed},
+                                   {"missed_marked", evaluation.unknown.missed_marked}};
     if (occupancy) document["occupancy"] = OccupancyJson(*occupancy);
     std::cout << document.dump(2) << "\n";
     return kOk;
@@ -251,7 +247,8 @@ int EvaluateWithGroundTruth(const std::vector<MappedObject>& mapped, const std::
     std::cout << "unknown objects (segmented, never named; not counted above): "
               << evaluation.unknown.mapped << ", " << evaluation.unknown.on_real
               << " on a real object, " << evaluation.unknown.on_missed
-              << " on one the named objects missed\n";
+              << " on one the named objects missed; " << evaluation.unknown.missed_marked
+              << " missed object(s) marked by one\n";
   }
   if (occupancy) PrintOccupancy(*occupancy);
   return kOk;

@@ -124,6 +124,7 @@ TEST(EvaluateObjects, UnknownObjectsAreCountedApartFromTheClasses) {
   EXPECT_EQ(evaluation.unknown.mapped, 3);
   EXPECT_EQ(evaluation.unknown.on_real, 2);
   EXPECT_EQ(evaluation.unknown.on_missed, 1);
+  EXPECT_EQ(evaluation.unknown.missed_marked, 1);
 }
 
 TEST(EvaluateObjects, ObjectsTheSequenceNeverShowedAreUnseenNotMissed) {
@@ -256,7 +257,8 @@ TEST(EvaluateObjects, WithAMeshModelAccuracyIsTheExactDistanceToItNotToTheSample
   // Model points 4 mm above the top, off the sample grid: 4 mm from the surface, but about 5 cm
   // from the nearest sample.
   for (int i = 0; i < 30; ++i) {
-    for (int j = 0; j < 12; ++j) mapped.model_W.emplace_back(0.25f + 0.05f * i, 0.25f + 0.05f * j, 0.704f);
+    for (int j = 0; j < 12; ++j)
+      mapped.model_W.emplace_back(0.25f + 0.05f * i, 0.25f + 0.05f * j, 0.704f);
   }
   // Points beside the table's edge (x < 0) are as far as the edge, and one point 1 m below is
   // capped at 10 cm.
@@ -269,8 +271,7 @@ TEST(EvaluateObjects, WithAMeshModelAccuracyIsTheExactDistanceToItNotToTheSample
 
   GroundTruthObject samples_only = table;
   samples_only.mesh_triangles.clear();
-  const ObjectEvaluation by_samples =
-      EvaluateObjects({samples_only}, {mapped}, EvaluationConfig{});
+  const ObjectEvaluation by_samples = EvaluateObjects({samples_only}, {mapped}, EvaluationConfig{});
   EXPECT_GT(by_samples.matches[0].model_to_surface_m, 0.02) << "the samples' spacing shows";
 }
 

@@ -897,18 +897,19 @@ TEST_F(MapperScene, OnlyFreeStandingUnnamedThingsBecomeUnknownObjects) {
 // blocks meet at a concave edge, two segments: one thing, one unknown object.
 TEST(UnknownObjects, LegsUnderASurfaceAreNoObjectsAndTouchingPartsAreOne) {
   const std::vector<SceneBox> boxes = {
-      {{-3.0, -3.0, -0.1}, {3.0, 3.0, 0.0}, {120, 120, 120}},     // floor
-      {{2.0, -3.0, 0.0}, {2.1, 3.0, 2.5}, {220, 220, 220}},       // wall
-      {{0.3, -0.6, 0.45}, {0.7, -0.2, 0.48}, {160, 110, 60}},     // stool seat
-      {{0.32, -0.58, 0.0}, {0.35, -0.55, 0.45}, {90, 60, 30}},    // its legs
+      {{-3.0, -3.0, -0.1}, {3.0, 3.0, 0.0}, {120, 120, 120}},   // floor
+      {{2.0, -3.0, 0.0}, {2.1, 3.0, 2.5}, {220, 220, 220}},     // wall
+      {{0.3, -0.6, 0.45}, {0.7, -0.2, 0.48}, {160, 110, 60}},   // stool seat
+      {{0.32, -0.58, 0.0}, {0.35, -0.55, 0.45}, {90, 60, 30}},  // its legs
       {{0.65, -0.58, 0.0}, {0.68, -0.55, 0.45}, {90, 60, 30}},
       {{0.32, -0.25, 0.0}, {0.35, -0.22, 0.45}, {90, 60, 30}},
       {{0.65, -0.25, 0.0}, {0.68, -0.22, 0.45}, {90, 60, 30}},
-      {{0.4, 0.3, 0.0}, {0.7, 0.5, 0.1}, {200, 60, 60}},          // step: low block
-      {{0.55, 0.5, 0.0}, {0.7, 0.7, 0.25}, {60, 60, 200}},        // ... and the high one
+      {{0.4, 0.3, 0.0}, {0.7, 0.5, 0.1}, {200, 60, 60}},    // step: low block
+      {{0.55, 0.5, 0.0}, {0.7, 0.7, 0.25}, {60, 60, 200}},  // ... and the high one
   };
   const CameraIntrinsics K;
-  const std::vector<Eigen::Vector3d> eyes = {{-1.2, 0.0, 1.3}, {-1.1, 0.4, 1.3}, {-1.1, -0.4, 1.35}};
+  const std::vector<Eigen::Vector3d> eyes = {
+      {-1.2, 0.0, 1.3}, {-1.1, 0.4, 1.3}, {-1.1, -0.4, 1.35}};
   Mapper mapper{MapperConfig{}};
   for (std::size_t view = 0; view < eyes.size(); ++view) {
     const Eigen::Isometry3d T_W_C = testing::LookAt(eyes[view], Eigen::Vector3d(0.5, 0.0, 0.2));

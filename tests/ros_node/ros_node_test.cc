@@ -581,7 +581,8 @@ TEST_F(RosNode, UnknownIdsAndBadRequestsGetAnErrorField) {
   query.request.class_name = "unicorn";
   ASSERT_TRUE(Call("query_objects", &query));
   EXPECT_FALSE(query.response.ok);
-  EXPECT_NE(query.response.error.find("'unicorn' is neither a COCO class nor \"unknown\""), std::string::npos);
+  EXPECT_NE(query.response.error.find("'unicorn' is neither a COCO class nor \"unknown\""),
+            std::string::npos);
 
   objmap_msgs::IsFree inverted;
   inverted.request.region_min.x = 1.0;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <set>
 #include <unordered_map>
 
 #include "evaluation/voxel_set.h"
@@ -215,8 +216,8 @@ class TriangleGrid {
 };
 
 // Mean capped distance from every point of `from` to the mesh; negative when either is empty.
-double MeanDistanceToMesh(const std::vector<Eigen::Vector3f>& from,
-                          const GroundTruthObject& real, double cap_m) {
+double MeanDistanceToMesh(const std::vector<Eigen::Vector3f>& from, const GroundTruthObject& real,
+                          double cap_m) {
   if (from.empty() || real.mesh_triangles.empty()) return -1.0;
   const TriangleGrid grid(real.mesh_vertices_W, real.mesh_triangles, 0.02);
   double sum = 0.0;
@@ -345,17 +346,22 @@ ObjectEvaluation EvaluateObjects(const std::vector<GroundTruthObject>& ground_tr
     if (match.model_to_surface_m >= 0.0) accuracies.push_back(match.model_to_surface_m);
     result.matches.push_back(match);
   }
+  std::set<std::size_t> missed_marked;
   for (std::size_t m : unknown) {
     ++result.unknown.mapped;
     bool on_real = false, on_missed = false;
     for (std::size_t r = 0; r < real.size(); ++r) {
       if (!CanStandFor(mapped[m], real[r], config)) continue;
       on_real = true;
-      on_missed = on_missed || standing_for.count(r) == 0;
+      if (standing_for.count(r) == 0) {
+        on_missed = true;
+        missed_marked.insert(r);
+      }
     }
     result.unknown.on_real += on_real ? 1 : 0;
     result.unknown.on_missed += on_missed ? 1 : 0;
   }
+  result.unknown.missed_marked = static_cast<int>(missed_marked.size());
   for (const auto& [class_id, counts] : result.per_class) result.totals.Add(counts);
   if (!accuracies.empty()) {
     double sum = 0.0;

@@ -103,6 +103,9 @@ struct UnknownObjectCounts {
   int mapped = 0;
   int on_real = 0;    ///< that stand on a real object (any class; the class margins hold)
   int on_missed = 0;  ///< of those, on a real object that no named mapped object stands for
+  /// Real objects that no named mapped object stands for and an unknown one does: misses the
+  /// map still knows to be something.
+  int missed_marked = 0;
 };
 
 struct ObjectEvaluation {

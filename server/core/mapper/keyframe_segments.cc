@@ -716,6 +716,10 @@ float Quantile(std::vector<float>* values, float quantile) {
 constexpr float kLowQuantile = 0.05f;
 constexpr float kHighQuantile = 0.95f;
 
+// A surface a segment holds up shows within this many pixels above its top edge: the board's
+// edge (a few centimetres) lies between a table's top and its leg.
+constexpr int kSurfaceSearchPx = 12;
+
 }  // namespace
 
 std::vector<SegmentedDetection> UnclassifiedSegments(
@@ -821,21 +825,28 @@ std::vector<SegmentedDetection> UnclassifiedSegments(
     const float foot = Quantile(&heights, kLowQuantile);
     const float top = Quantile(&heights, kHighQuantile);
     if (std::abs(foot) > unknown.max_support_gap_m || top < unknown.min_height_m) continue;
-    // A leg holds up a surface: in the image, an up-facing plane at or above its top continues
-    // it upwards (where the surface meets it, or hides the rest of it). A part of the
-    // furniture (a table, a stool, a chair's seat), which the surface's own object names.
+    // A leg holds up a surface: within a few pixels above its top edge (the board's edge
+    // between), an up-facing plane at or above its top. A part of the furniture (a table, a
+    // stool, a chair's seat), which the surface's own object or another view names.
     bool under_a_surface = false;
     for (int k = first; k < last && !under_a_surface; ++k) {
       const int i = index.pixel_ids[k];
-      if (i < width) continue;
-      const int label = segmentation.labels[i - width];
-      if (label < 0 || label == s || !segmentation.segment_is_plane[label]) continue;
+      if (i < width || segmentation.labels[i - width] == s) continue;
+      int label = -1;
+      for (int j = i - width, step = 0; j >= 0 && step < kSurfaceSearchPx; j -= width, ++step) {
+        const int above = segmentation.labels[j];
+        if (above >= 0 && above != s && segmentation.segment_is_plane[above]) {
+          label = above;
+          break;
+        }
+      }
+      if (label < 0) continue;
       const std::optional<PlaneFit>& plane = up_facing_plane(label);
       if (!plane) continue;
       const float plane_height =
           static_cast<float>(candidate.up.dot(plane->centre)) - candidate.support_height;
-      under_a_surface = plane_height > unknown.min_height_m &&
-                        plane_height >= top - unknown.max_support_gap_m;
+      under_a_surface =
+          plane_height > unknown.min_height_m && plane_height >= top - unknown.max_support_gap_m;
     }
     if (under_a_surface) continue;
     // Hidden along a third or more of its top edge by something nearer (the far legs of a stool
@@ -856,11 +867,55 @@ std::vector<SegmentedDetection> UnclassifiedSegments(
   }
   if (candidates.empty()) return result;
 
+  // A thing of its own is free at its top: above its top edge lies what is behind it (a wall,
+  // the surface it stands on) or another candidate it is part of. A segment that continues
+  // upwards, without a depth step, into something else along a third or more of its top edge
+  // is attached to it: a table's or a stool's leg under its top or apron, a drawer in a
+  // cabinet, the foot of a wall.
+  auto free_at_top = [&](const Candidate& candidate) {
+    const int s = candidate.segment;
+    int top_edge = 0, attached = 0;
+    for (int k = index.offsets[s]; k < index.offsets[s + 1]; ++k) {
+      const int i = index.pixel_ids[k];
+      if (i < width || !cloud_C.IsValid(i) || !cloud_C.IsValid(i - width)) continue;
+      const int label = segmentation.labels[i - width];
+      if (label == s) continue;
+      ++top_edge;
+      if (label < 0 || candidate_of[label] >= 0) continue;
+      const float z = cloud_C.points_C[i].z(), z_above = cloud_C.points_C[i - width].z();
+      if (std::abs(z_above - z) > config.segmenter.depth_jump_ratio * z) continue;
+      if (segmentation.segment_is_plane[label]) {
+        // The plane it stands on, seen just behind its top, is no attachment.
+        const std::optional<PlaneFit>& plane = up_facing_plane(label);
+        if (plane &&
+            static_cast<float>(candidate.up.dot(plane->centre)) - candidate.support_height <=
+                unknown.min_height_m) {
+          continue;
+        }
+      }
+      ++attached;
+    }
+    return attached * 3 <= top_edge;
+  };
+  // Until nothing changes: a part is free only through parts that are free themselves.
+  std::vector<bool> attached(candidates.size(), false);
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (std::size_t c = 0; c < candidates.size(); ++c) {
+      if (attached[c] || free_at_top(candidates[c])) continue;
+      attached[c] = true;
+      candidate_of[candidates[c].segment] = -1;
+      changed = true;
+    }
+  }
+
   // Candidates that meet in the image with continuous depth are parts of one thing (the seat,
   // back and legs of a chair nobody named): one observation, not one per part.
   std::vector<int> group(candidates.size());
   std::iota(group.begin(), group.end(), 0);
-  std::function<int(int)> root = [&](int c) { return group[c] == c ? c : group[c] = root(group[c]); };
+  std::function<int(int)> root = [&](int c) {
+    return group[c] == c ? c : group[c] = root(group[c]);
+  };
   for (int v = 0; v < height; ++v) {
     for (int u = 0; u < width; ++u) {
       const int i = v * width + u;
@@ -877,7 +932,9 @@ std::vector<SegmentedDetection> UnclassifiedSegments(
     }
   }
   std::map<int, std::vector<int>> members;  // root -> candidates, ascending
-  for (int c = 0; c < static_cast<int>(candidates.size()); ++c) members[root(c)].push_back(c);
+  for (int c = 0; c < static_cast<int>(candidates.size()); ++c) {
+    if (!attached[c]) members[root(c)].push_back(c);
+  }
 
   std::vector<float> xs, ys, zs;
   for (const auto& [group_root, parts] : members) {
@@ -902,8 +959,7 @@ std::vector<SegmentedDetection> UnclassifiedSegments(
     for (int i : pixels) {
       if (!cloud_C.IsValid(i)) continue;
       const Eigen::Vector3f& p = cloud_C.points_C[i];
-      heights.push_back(static_cast<float>(first.up.dot(p.cast<double>())) -
-                        first.support_height);
+      heights.push_back(static_cast<float>(first.up.dot(p.cast<double>())) - first.support_height);
       xs.push_back(p.x());
       ys.push_back(p.y());
       zs.push_back(p.z());
@@ -915,8 +971,7 @@ std::vector<SegmentedDetection> UnclassifiedSegments(
     const float size = std::max(extent.maxCoeff(), rise);
     if (size < unknown.min_extent_m || size > unknown.max_extent_m) continue;
     SegmentedDetection entry;
-    entry.observation.segment_C =
-        SegmentPoints(cloud_C, pixels, config.objects.model_voxel_size_m);
+    entry.observation.segment_C = SegmentPoints(cloud_C, pixels, config.objects.model_voxel_size_m);
     if (static_cast<int>(entry.observation.segment_C.size()) < config.min_segment_points) continue;
     entry.observation.keyframe_id = keyframe_id;
     entry.observation.box = {box.x_min * sx, box.y_min * sy, (box.x_max + 1.f) * sx,
