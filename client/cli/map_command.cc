@@ -1,4 +1,5 @@
 // `objmap map`: an RGB-D sequence, recording or live camera in, an object map out.
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -161,7 +162,13 @@ void PrintSummary(const Mapper& mapper, const SequenceRunReport& report, double 
   // The first evidence computation projects every object into every keyframe (later ones, as a
   // server makes them after each keyframe, only the new keyframe and the changed objects).
   const auto evidence_start = std::chrono::steady_clock::now();
-  const std::size_t confirmed = mapper.ConfirmedObjects().size();
+  const std::vector<const MapObject*> confirmed_objects = mapper.ConfirmedObjects();
+  const auto confirmed_unknown =
+      std::count_if(confirmed_objects.begin(), confirmed_objects.end(),
+                    [](const MapObject* object) { return object->Label() == kUnknownClassId; });
+  const std::size_t confirmed =
+      confirmed_objects.size() -
+      (mapper.config().inventory.count_unknown ? 0 : static_cast<std::size_t>(confirmed_unknown));
   const double evidence_ms = std::chrono::duration<double, std::milli>(
                                  std::chrono::steady_clock::now() - evidence_start)
                                  .count();
@@ -170,12 +177,15 @@ void PrintSummary(const Mapper& mapper, const SequenceRunReport& report, double 
             << ", confidence >= " << mapper.config().inventory.min_confidence
             << ", observations >= " << mapper.config().inventory.min_observations
             << "): " << confirmed << " (evidence of all objects from all keyframes: "
-            << std::fixed << std::setprecision(1) << evidence_ms << " ms)\n\n";
+            << std::fixed << std::setprecision(1) << evidence_ms << " ms)\n";
+  std::cout << "unknown objects (never named, segmented in >= "
+            << mapper.config().inventory.unknown_min_views << " views): " << confirmed_unknown
+            << "\n\n";
   std::cout << std::left << std::setw(16) << "class" << std::right << std::setw(6) << "count"
             << std::setw(17) << "mean confidence"
             << "\n";
   for (const InventoryEntry& entry : mapper.Inventory()) {
-    std::cout << std::left << std::setw(16) << CocoClassName(entry.class_id) << std::right
+    std::cout << std::left << std::setw(16) << ObjectClassName(entry.class_id) << std::right
               << std::setw(6) << entry.count << std::setw(17) << std::fixed << std::setprecision(3)
               << entry.mean_confidence << "\n";
   }
