@@ -34,10 +34,12 @@ struct SegmentedDetection {
 
 /// Object-like segments of a keyframe that no detection picked (SegmentDetections' `detected`):
 /// non-plane segments that lie whole in the image, stand on an up-facing supporting plane and
-/// have an object's size (UnknownObjectConfig). Each becomes an observation of class
-/// kUnknownClassId with score 0, boxed by its pixels' extent in colour pixels. Segments mostly
-/// inside a detection's (dilated) box are parts of what the detector named (a chair's legs, the
-/// lower part of a table) and are left out; so are those that detections claimed a share of.
+/// are free at their top (no surface they hold up, not hidden, not continuing into something
+/// else); those that meet with continuous depth are one thing, kept when it has an object's
+/// size (UnknownObjectConfig). Each becomes an observation of class kUnknownClassId with score
+/// 0, boxed by its pixels' extent in colour pixels. Segments mostly inside a detection's
+/// (dilated) box are parts of what the detector named (a chair's legs, the lower part of a
+/// table) and are left out; so are those that detections claimed a share of.
 [[nodiscard]] std::vector<SegmentedDetection> UnclassifiedSegments(
     const RgbdFrame& frame, const OrganizedCloud& cloud_C, const SegmentationResult& segmentation,
     const std::vector<Detection>& detections, const std::vector<SegmentedDetection>& detected,
