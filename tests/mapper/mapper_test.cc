@@ -845,6 +845,38 @@ TEST_F(MapperScene, AnUndetectedThingOnTheTableIsAnUnknownObjectUntilADetectionN
   EXPECT_NEAR(toasters[0]->Confidence(), 0.7f, 1e-5) << "over the one view that named it";
 }
 
+// A loop closure that re-associates replays the unknown observations too: the drifted view's
+// copy of the unnamed box joins it again, and the object keeps its id.
+TEST_F(MapperScene, ANonRigidCorrectionReassociatesAnUnknownObjectLikeTheNamedOnes) {
+  boxes_.push_back({{0.15, -0.05, 0.70}, {0.27, 0.05, 0.80}, {40, 160, 40}});
+  Mapper mapper{MapperConfig{}};
+  Eigen::Isometry3d drifted = Pose(2);
+  drifted.pretranslate(Eigen::Vector3d(0.0, 0.15, 0.0));
+  for (int view = 0; view < 3; ++view) {
+    RgbdFrame frame = Frame(view);
+    if (view == 2) frame.T_W_C = drifted;
+    KeyframeResult result;
+    std::string why;
+    ASSERT_TRUE(mapper.AddKeyframe(frame, CupDetections(view), &result, &why)) << why;
+  }
+  auto unknown = ObjectsLabelled(mapper, kUnknownClassId);
+  ASSERT_EQ(unknown.size(), 2u) << "the drifted view's box lands beside the first";
+  const ObjectId first_id = unknown[0]->id;
+  EXPECT_EQ(unknown[0]->observations.size(), 2u);
+
+  std::string why;
+  PoseUpdateReport report;
+  ASSERT_TRUE(mapper.UpdatePoses({{3, Pose(2)}}, &why, &report)) << why;
+  EXPECT_TRUE(report.reassociated);
+  unknown = ObjectsLabelled(mapper, kUnknownClassId);
+  ASSERT_EQ(unknown.size(), 1u);
+  EXPECT_EQ(unknown[0]->id, first_id);
+  EXPECT_EQ(unknown[0]->observations.size(), 3u);
+  EXPECT_EQ(ObjectsLabelled(mapper, kCup).size(), 2u);
+  const auto confirmed = mapper.ConfirmedObjects();
+  EXPECT_EQ(std::count(confirmed.begin(), confirmed.end(), unknown[0]), 1);
+}
+
 TEST_F(MapperScene, AnUnknownObjectNeedsSeveralViewsAndCanBeSwitchedOff) {
   const SceneBox thing{{0.15, -0.05, 0.70}, {0.27, 0.05, 0.80}, {40, 160, 40}};
   boxes_.push_back(thing);
