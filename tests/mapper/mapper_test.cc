@@ -17,6 +17,8 @@ namespace {
 using testing::SceneBox;
 
 const int kCup = CocoClassId("cup");
+// A box on the table beside the cups that no detection names.
+const SceneBox kUnnamedBox{{0.15, -0.05, 0.70}, {0.27, 0.05, 0.80}, {40, 160, 40}};
 
 // The mapper's objects labelled `class_id`, in id order.
 std::vector<const MapObject*> ObjectsLabelled(const Mapper& mapper, int class_id) {
@@ -70,6 +72,20 @@ class MapperScene : public ::testing::Test {
       std::string why;
       ASSERT_TRUE(mapper->AddKeyframe(Frame(view), CupDetections(view), &result, &why)) << why;
       EXPECT_EQ(result.detections_used, 2) << "view " << view;
+    }
+  }
+
+  // The three views, the third with a pose drifted 15 cm sideways (a loop closure corrects it
+  // to Pose(2)): what it sees lands beside the objects of the first two.
+  void MapWithTheThirdViewDrifted(Mapper* mapper) const {
+    Eigen::Isometry3d drifted = Pose(2);
+    drifted.pretranslate(Eigen::Vector3d(0.0, 0.15, 0.0));
+    for (int view = 0; view < 3; ++view) {
+      RgbdFrame frame = Frame(view);
+      if (view == 2) frame.T_W_C = drifted;
+      KeyframeResult result;
+      std::string why;
+      ASSERT_TRUE(mapper->AddKeyframe(frame, CupDetections(view), &result, &why)) << why;
     }
   }
 
@@ -251,15 +267,7 @@ TEST_F(MapperScene, PoseUpdateRegeneratesObjectsAndOccupancy) {
 // association is replayed with the corrected pose and the third view's cups join the first two.
 TEST_F(MapperScene, NonRigidCorrectionReassociatesAndKeepsTheIdsOfTheObjectsThatStay) {
   Mapper mapper{MapperConfig{}};
-  Eigen::Isometry3d drifted = Pose(2);
-  drifted.pretranslate(Eigen::Vector3d(0.0, 0.15, 0.0));
-  for (int view = 0; view < 3; ++view) {
-    RgbdFrame frame = Frame(view);
-    if (view == 2) frame.T_W_C = drifted;
-    KeyframeResult result;
-    std::string why;
-    ASSERT_TRUE(mapper.AddKeyframe(frame, CupDetections(view), &result, &why)) << why;
-  }
+  MapWithTheThirdViewDrifted(&mapper);
   ASSERT_EQ(mapper.objects().size(), 4u) << "the drifted view's cups are two more objects";
   std::vector<ObjectId> seen_twice;
   for (const auto& [id, object] : mapper.objects().objects()) {
@@ -287,12 +295,7 @@ TEST_F(MapperScene, NonRigidCorrectionReassociatesAndKeepsTheIdsOfTheObjectsThat
   MapperConfig keep;
   keep.reassociation.enabled = false;
   Mapper kept{keep};
-  for (int view = 0; view < 3; ++view) {
-    RgbdFrame frame = Frame(view);
-    if (view == 2) frame.T_W_C = drifted;
-    KeyframeResult result;
-    ASSERT_TRUE(kept.AddKeyframe(frame, CupDetections(view), &result, &why)) << why;
-  }
+  MapWithTheThirdViewDrifted(&kept);
   ASSERT_TRUE(kept.UpdatePoses({{3, Pose(2)}}, &why, &report)) << why;
   EXPECT_FALSE(report.reassociated);
   EXPECT_EQ(kept.objects().size(), 4u);
@@ -797,7 +800,7 @@ TEST_F(MapperScene, ATableIsItsWholeTopNotAChairBackOrANearerTable) {
 // A box on the table that no detector names, seen from three viewpoints: an unknown object of
 // the map (queries see it), not in the inventory; a later detection of it names it.
 TEST_F(MapperScene, AnUndetectedThingOnTheTableIsAnUnknownObjectUntilADetectionNamesIt) {
-  const SceneBox thing{{0.15, -0.05, 0.70}, {0.27, 0.05, 0.80}, {40, 160, 40}};
+  const SceneBox thing = kUnnamedBox;
   boxes_.push_back(thing);
   Mapper mapper{MapperConfig{}};
   for (int view = 0; view < 3; ++view) {
@@ -848,17 +851,9 @@ TEST_F(MapperScene, AnUndetectedThingOnTheTableIsAnUnknownObjectUntilADetectionN
 // A loop closure that re-associates replays the unknown observations too: the drifted view's
 // copy of the unnamed box joins it again, and the object keeps its id.
 TEST_F(MapperScene, ANonRigidCorrectionReassociatesAnUnknownObjectLikeTheNamedOnes) {
-  boxes_.push_back({{0.15, -0.05, 0.70}, {0.27, 0.05, 0.80}, {40, 160, 40}});
+  boxes_.push_back(kUnnamedBox);
   Mapper mapper{MapperConfig{}};
-  Eigen::Isometry3d drifted = Pose(2);
-  drifted.pretranslate(Eigen::Vector3d(0.0, 0.15, 0.0));
-  for (int view = 0; view < 3; ++view) {
-    RgbdFrame frame = Frame(view);
-    if (view == 2) frame.T_W_C = drifted;
-    KeyframeResult result;
-    std::string why;
-    ASSERT_TRUE(mapper.AddKeyframe(frame, CupDetections(view), &result, &why)) << why;
-  }
+  MapWithTheThirdViewDrifted(&mapper);
   auto unknown = ObjectsLabelled(mapper, kUnknownClassId);
   ASSERT_EQ(unknown.size(), 2u) << "the drifted view's box lands beside the first";
   const ObjectId first_id = unknown[0]->id;
@@ -878,8 +873,7 @@ TEST_F(MapperScene, ANonRigidCorrectionReassociatesAnUnknownObjectLikeTheNamedOn
 }
 
 TEST_F(MapperScene, AnUnknownObjectNeedsSeveralViewsAndCanBeSwitchedOff) {
-  const SceneBox thing{{0.15, -0.05, 0.70}, {0.27, 0.05, 0.80}, {40, 160, 40}};
-  boxes_.push_back(thing);
+  boxes_.push_back(kUnnamedBox);
   Mapper mapper{MapperConfig{}};
   for (int view = 0; view < 2; ++view) {
     KeyframeResult result;
