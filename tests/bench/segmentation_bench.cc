@@ -41,6 +41,7 @@
 #include "pipeline/sequence_runner.h"
 #include "pointcloud_io/pointcloud_io.h"
 #include "segmentation/mosd_ground_truth.h"
+#include "segmentation/segment_index.h"
 #include "segmentation/segmenter.h"
 
 namespace {
@@ -258,8 +259,9 @@ void RunKitchen(const std::string& sequence, int frames, int stride, int pcl_fra
       const objmap::SegmentationResult result = segmenter.Segment(cloud);
       segment[r] = stopwatch.Elapsed();
       stopwatch = Stopwatch();
+      const objmap::SegmentIndex index = objmap::IndexSegments(result, cloud);
       const auto segmented =
-          objmap::SegmentDetections(frame, cloud, result, detections, 0, mapper_config);
+          objmap::SegmentDetections(frame, cloud, result, index, detections, 0, mapper_config);
       detection_to_segment[r] = stopwatch.Elapsed();
       parts[r] = whole.Elapsed();
       objmap::KeyframeResult keyframe;

@@ -75,11 +75,12 @@ class MapperScene : public ::testing::Test {
     }
   }
 
-  // The three views, the third with a pose drifted 15 cm sideways (a loop closure corrects it
-  // to Pose(2)): what it sees lands beside the objects of the first two.
-  void MapWithTheThirdViewDrifted(Mapper* mapper) const {
+  // The three views, the third with its pose drifted by `drift` (15 cm sideways by default; a
+  // loop closure corrects it to Pose(2)): what it sees lands beside the objects of the first two.
+  void MapWithTheThirdViewDrifted(Mapper* mapper,
+                                  const Eigen::Vector3d& drift = {0.0, 0.15, 0.0}) const {
     Eigen::Isometry3d drifted = Pose(2);
-    drifted.pretranslate(Eigen::Vector3d(0.0, 0.15, 0.0));
+    drifted.pretranslate(drift);
     for (int view = 0; view < 3; ++view) {
       RgbdFrame frame = Frame(view);
       if (view == 2) frame.T_W_C = drifted;
@@ -304,21 +305,11 @@ TEST_F(MapperScene, NonRigidCorrectionReassociatesAndKeepsTheIdsOfTheObjectsThat
 // Correcting one keyframe of three rebuilds the OctoMap only where that keyframe's rays reach;
 // the map is the one a full rebuild gives.
 TEST_F(MapperScene, CorrectingAFewKeyframesRebuildsOnlyWhereTheySeeWithTheSameMap) {
-  Eigen::Isometry3d drifted = Pose(2);
-  drifted.pretranslate(Eigen::Vector3d(0.0, 0.04, 0.01));
   MapperConfig incremental;
   MapperConfig full;
   full.regeneration.incremental_max_moved_fraction = 0.f;
   Mapper a{incremental}, b{full};
-  for (Mapper* mapper : {&a, &b}) {
-    for (int view = 0; view < 3; ++view) {
-      RgbdFrame frame = Frame(view);
-      if (view == 2) frame.T_W_C = drifted;
-      KeyframeResult result;
-      std::string why;
-      ASSERT_TRUE(mapper->AddKeyframe(frame, CupDetections(view), &result, &why)) << why;
-    }
-  }
+  for (Mapper* mapper : {&a, &b}) MapWithTheThirdViewDrifted(mapper, {0.0, 0.04, 0.01});
   const OccupancyCounts drifted_counts = a.occupancy().Counts();
   std::string why;
   PoseUpdateReport report_a, report_b;

@@ -22,6 +22,15 @@ bool Inside(const BoundingBox2D& box, int u, int v) {
   return u >= box.x_min && u <= box.x_max && v >= box.y_min && v <= box.y_max;
 }
 
+// Value at `quantile` (0..1) of `values` (reordered; not empty).
+float Quantile(std::vector<float>* values, float quantile) {
+  const std::size_t k = std::min(
+      values->size() - 1, static_cast<std::size_t>(quantile * static_cast<float>(values->size())));
+  std::nth_element(values->begin(), values->begin() + static_cast<std::ptrdiff_t>(k),
+                   values->end());
+  return (*values)[k];
+}
+
 // A surface's top faces the image's up at least this much (PlaneFit::UpFacing).
 constexpr float kMinUpFacing = 0.3f;
 // Pieces of one table top: their centres lie within this distance of each other's plane, and
@@ -471,10 +480,6 @@ std::vector<StackLayer> CutStack(const SegmentationResult& segmentation,
   std::vector<std::pair<float, float>> own_span(
       count, {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::quiet_NaN()});
   std::vector<float> inside_median(count, std::numeric_limits<float>::quiet_NaN());
-  auto median = [](std::vector<float>* values) {
-    std::nth_element(values->begin(), values->begin() + values->size() / 2, values->end());
-    return (*values)[values->size() / 2];
-  };
   for (std::size_t b = 0; b < count; ++b) {
     std::vector<float> own, inside;
     for (std::size_t p = 0; p < group.pixels.size(); ++p) {
@@ -489,11 +494,11 @@ std::vector<StackLayer> CutStack(const SegmentationResult& segmentation,
       if (!shared) own.push_back(h);
     }
     if (own.size() >= kMinOwnPixels) {
-      own_median[b] = median(&own);
+      own_median[b] = Quantile(&own, 0.5f);
       std::sort(own.begin(), own.end());
       own_span[b] = {own[own.size() / 20], own[own.size() - 1 - own.size() / 20]};
     }
-    if (!inside.empty()) inside_median[b] = median(&inside);
+    if (!inside.empty()) inside_median[b] = Quantile(&inside, 0.5f);
   }
   std::vector<int> image_order(count);  // lowest in the image first
   std::iota(image_order.begin(), image_order.end(), 0);
@@ -562,13 +567,12 @@ BoundingBox2D ToDepthPixels(const BoundingBox2D& box, const ColorImage& color,
 
 std::vector<SegmentedDetection> SegmentDetections(
     const RgbdFrame& frame, const OrganizedCloud& cloud_C, const SegmentationResult& segmentation,
-    const std::vector<Detection>& detections, KeyframeId keyframe_id, const MapperConfig& config) {
+    const SegmentIndex& index, const std::vector<Detection>& detections, KeyframeId keyframe_id,
+    const MapperConfig& config) {
   std::vector<int> order(detections.size());
   std::iota(order.begin(), order.end(), 0);
   std::stable_sort(order.begin(), order.end(),
                    [&](int a, int b) { return detections[a].score > detections[b].score; });
-  // Built once: every detection box then costs its own area, not a pass over the image.
-  const SegmentIndex index = IndexSegments(segmentation, cloud_C);
   std::vector<SegmentedDetection> segmented;
   const std::size_t frame_pixels = segmentation.labels.size();
   std::vector<PixelClaim> claimed;
@@ -702,15 +706,6 @@ std::vector<SegmentedDetection> SegmentDetections(
 
 namespace {
 
-// Value at `quantile` (0..1) of `values` (reordered).
-float Quantile(std::vector<float>* values, float quantile) {
-  const std::size_t k = std::min(
-      values->size() - 1, static_cast<std::size_t>(quantile * static_cast<float>(values->size())));
-  std::nth_element(values->begin(), values->begin() + static_cast<std::ptrdiff_t>(k),
-                   values->end());
-  return (*values)[k];
-}
-
 // Depths and extents of a segment are read from its 5th to 95th percentiles: a few flying pixels
 // at its border would otherwise make a mug half a metre tall.
 constexpr float kLowQuantile = 0.05f;
@@ -724,12 +719,12 @@ constexpr int kSurfaceSearchPx = 12;
 
 std::vector<SegmentedDetection> UnclassifiedSegments(
     const RgbdFrame& frame, const OrganizedCloud& cloud_C, const SegmentationResult& segmentation,
-    const std::vector<Detection>& detections, const std::vector<SegmentedDetection>& detected,
-    KeyframeId keyframe_id, const MapperConfig& config) {
+    const SegmentIndex& index, const std::vector<Detection>& detections,
+    const std::vector<SegmentedDetection>& detected, KeyframeId keyframe_id,
+    const MapperConfig& config) {
   const UnknownObjectConfig& unknown = config.unknown_objects;
   std::vector<SegmentedDetection> result;
   if (!unknown.enabled || segmentation.num_segments == 0) return result;
-  const SegmentIndex index = IndexSegments(segmentation, cloud_C);
   if (!index.Matches(segmentation)) return result;
   const int width = segmentation.width, height = segmentation.height;
   std::vector<std::uint8_t> claimed(segmentation.labels.size(), 0);
@@ -764,6 +759,8 @@ std::vector<SegmentedDetection> UnclassifiedSegments(
     int segment = -1;
     Eigen::Vector3d up = Eigen::Vector3d::Zero();
     float support_height = 0.f;
+    // Its top edge: its pixels whose neighbour above belongs to something else.
+    std::vector<int> top_edge;
   };
   std::vector<Candidate> candidates;
   std::vector<int> candidate_of(segmentation.num_segments, -1);
@@ -825,13 +822,16 @@ std::vector<SegmentedDetection> UnclassifiedSegments(
     const float foot = Quantile(&heights, kLowQuantile);
     const float top = Quantile(&heights, kHighQuantile);
     if (std::abs(foot) > unknown.max_support_gap_m || top < unknown.min_height_m) continue;
+    for (int k = first; k < last; ++k) {
+      const int i = index.pixel_ids[k];
+      if (i >= width && segmentation.labels[i - width] != s) candidate.top_edge.push_back(i);
+    }
     // A leg holds up a surface: within a few pixels above its top edge (the board's edge
     // between), an up-facing plane at or above its top. A part of the furniture (a table, a
     // stool, a chair's seat), which the surface's own object or another view names.
     bool under_a_surface = false;
-    for (int k = first; k < last && !under_a_surface; ++k) {
-      const int i = index.pixel_ids[k];
-      if (i < width || segmentation.labels[i - width] == s) continue;
+    for (std::size_t e = 0; e < candidate.top_edge.size() && !under_a_surface; ++e) {
+      const int i = candidate.top_edge[e];
       int label = -1;
       for (int j = i - width, step = 0; j >= 0 && step < kSurfaceSearchPx; j -= width, ++step) {
         const int above = segmentation.labels[j];
@@ -853,9 +853,8 @@ std::vector<SegmentedDetection> UnclassifiedSegments(
     // behind its seat, a mug behind a box): like a segment at the image border, only a part of
     // it is in view.
     int top_edge = 0, hidden_top_edge = 0;
-    for (int k = first; k < last; ++k) {
-      const int i = index.pixel_ids[k];
-      if (i < width || segmentation.labels[i - width] == s || !cloud_C.IsValid(i)) continue;
+    for (const int i : candidate.top_edge) {
+      if (!cloud_C.IsValid(i)) continue;
       ++top_edge;
       const float z = cloud_C.points_C[i].z();
       const float z_above = cloud_C.IsValid(i - width) ? cloud_C.points_C[i - width].z() : z;
@@ -863,7 +862,7 @@ std::vector<SegmentedDetection> UnclassifiedSegments(
     }
     if (hidden_top_edge * 3 > top_edge) continue;
     candidate_of[s] = static_cast<int>(candidates.size());
-    candidates.push_back(candidate);
+    candidates.push_back(std::move(candidate));
   }
   if (candidates.empty()) return result;
 
@@ -873,13 +872,10 @@ std::vector<SegmentedDetection> UnclassifiedSegments(
   // is attached to it: a table's or a stool's leg under its top or apron, a drawer in a
   // cabinet, the foot of a wall.
   auto free_at_top = [&](const Candidate& candidate) {
-    const int s = candidate.segment;
     int top_edge = 0, attached = 0;
-    for (int k = index.offsets[s]; k < index.offsets[s + 1]; ++k) {
-      const int i = index.pixel_ids[k];
-      if (i < width || !cloud_C.IsValid(i) || !cloud_C.IsValid(i - width)) continue;
+    for (const int i : candidate.top_edge) {
+      if (!cloud_C.IsValid(i) || !cloud_C.IsValid(i - width)) continue;
       const int label = segmentation.labels[i - width];
-      if (label == s) continue;
       ++top_edge;
       if (label < 0 || candidate_of[label] >= 0) continue;
       const float z = cloud_C.points_C[i].z(), z_above = cloud_C.points_C[i - width].z();

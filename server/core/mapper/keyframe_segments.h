@@ -28,9 +28,12 @@ struct SegmentedDetection {
 /// share the segment out by box; detections of a stack class (MapperConfig::stack_classes) that
 /// pick one segment cut it by height above the supporting plane under it, one layer per box at a
 /// distinct height; and nothing fuses into a surface-class (table) observation.
+/// `index` is IndexSegments(segmentation, cloud_C), built once per keyframe for this and
+/// UnclassifiedSegments.
 [[nodiscard]] std::vector<SegmentedDetection> SegmentDetections(
     const RgbdFrame& frame, const OrganizedCloud& cloud_C, const SegmentationResult& segmentation,
-    const std::vector<Detection>& detections, KeyframeId keyframe_id, const MapperConfig& config);
+    const SegmentIndex& index, const std::vector<Detection>& detections, KeyframeId keyframe_id,
+    const MapperConfig& config);
 
 /// Object-like segments of a keyframe that no detection picked (SegmentDetections' `detected`):
 /// non-plane segments that lie whole in the image, stand on an up-facing supporting plane and
@@ -42,7 +45,8 @@ struct SegmentedDetection {
 /// table) and are left out; so are those that detections claimed a share of.
 [[nodiscard]] std::vector<SegmentedDetection> UnclassifiedSegments(
     const RgbdFrame& frame, const OrganizedCloud& cloud_C, const SegmentationResult& segmentation,
-    const std::vector<Detection>& detections, const std::vector<SegmentedDetection>& detected,
-    KeyframeId keyframe_id, const MapperConfig& config);
+    const SegmentIndex& index, const std::vector<Detection>& detections,
+    const std::vector<SegmentedDetection>& detected, KeyframeId keyframe_id,
+    const MapperConfig& config);
 
 }  // namespace objmap

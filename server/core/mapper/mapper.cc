@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "mapper/keyframe_segments.h"
+#include "segmentation/segment_index.h"
 #include "types/organized_cloud.h"
 #include "types/rounding.h"
 
@@ -534,13 +535,16 @@ bool Mapper::AddKeyframe(const RgbdFrame& frame, const std::vector<Detection>& d
   auto start = Clock::now();
   const OrganizedCloud cloud_C = BackProject(frame.depth, frame.color, frame.intrinsics);
   const SegmentationResult segmentation = impl_->segmenter.Segment(cloud_C);
+  // Built once: every detection box then costs its own area, not a pass over the image.
+  const SegmentIndex index = IndexSegments(segmentation, cloud_C);
   std::vector<SegmentedDetection> segmented = SegmentDetections(
-      frame, cloud_C, segmentation, detections, result->keyframe_id, impl_->config);
+      frame, cloud_C, segmentation, index, detections, result->keyframe_id, impl_->config);
   result->detections_used = static_cast<int>(segmented.size());
   // Unclassified segments stay structure in the OctoMap: the record's mask has the named only.
   KeyframeRecord record = MakeRecord(frame, segmented);
-  std::vector<SegmentedDetection> unclassified = UnclassifiedSegments(
-      frame, cloud_C, segmentation, detections, segmented, result->keyframe_id, impl_->config);
+  std::vector<SegmentedDetection> unclassified =
+      UnclassifiedSegments(frame, cloud_C, segmentation, index, detections, segmented,
+                           result->keyframe_id, impl_->config);
   result->unclassified_segments = static_cast<int>(unclassified.size());
   for (SegmentedDetection& entry : unclassified) segmented.push_back(std::move(entry));
   result->timings.segmentation_ms = MillisecondsSince(start);

@@ -9,6 +9,10 @@
 namespace objmap {
 namespace {
 
+// 21 bits per axis, offset so that +-10 km at 5 mm fits in the signed range.
+constexpr std::int64_t kAxisOffset = 1 << 20;
+constexpr std::uint64_t kAxisMask = (1u << 21) - 1;
+
 // Sums of one voxel of VoxelDownsample, as VoxelModel keeps them.
 struct VoxelSums {
   Eigen::Vector3d xyz = Eigen::Vector3d::Zero();
@@ -47,12 +51,6 @@ class VoxelSlots {
   int shift_ = 64;
 };
 
-}  // namespace
-
-namespace {
-// 21 bits per axis, offset so that +-10 km at 5 mm fits in the signed range.
-constexpr std::int64_t kAxisOffset = 1 << 20;
-constexpr std::uint64_t kAxisMask = (1u << 21) - 1;
 }  // namespace
 
 std::uint64_t VoxelKey(const Eigen::Vector3f& p, float voxel_size_m) {
