@@ -21,6 +21,10 @@ void VisitMapper(MapperConfig* m, Visitor& v) {
   v("stack_classes", &m->stack_classes);
   v("min_stack_layer_gap_m", &m->min_stack_layer_gap_m);
   v("min_segment_box_fill", &m->min_segment_box_fill);
+  v("part_classes", &m->part_classes);
+  v("whole_classes", &m->whole_classes);
+  v("part_inside_fraction", &m->part_inside_fraction);
+  v("min_whole_to_part_area", &m->min_whole_to_part_area);
   SegmenterConfig& s = m->segmenter;
   v.Section("segmenter");
   v("depth_jump_ratio", &s.depth_jump_ratio);

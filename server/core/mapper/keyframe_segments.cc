@@ -557,6 +557,24 @@ std::vector<StackLayer> CutStack(const SegmentationResult& segmentation,
 
 }  // namespace
 
+bool IsPartOfAnotherDetection(const std::vector<Detection>& detections, std::size_t d,
+                              const MapperConfig& config) {
+  const Detection& part = detections[d];
+  if (!Contains(config.part_classes, part.class_id)) return false;
+  for (std::size_t w = 0; w < detections.size(); ++w) {
+    const Detection& whole = detections[w];
+    if (w == d || whole.score < config.min_detection_score ||
+        !Contains(config.whole_classes, whole.class_id)) {
+      continue;
+    }
+    if (BoxInsideFraction(part.box, whole.box) >= config.part_inside_fraction &&
+        whole.box.Area() >= config.min_whole_to_part_area * part.box.Area()) {
+      return true;
+    }
+  }
+  return false;
+}
+
 BoundingBox2D ToDepthPixels(const BoundingBox2D& box, const ColorImage& color,
                             const DepthImage& depth) {
   if (color.empty() || (color.width == depth.width && color.height == depth.height)) return box;
@@ -605,6 +623,7 @@ std::vector<SegmentedDetection> SegmentDetections(
   for (int d : order) {
     const Detection& detection = detections[d];
     if (detection.score < config.min_detection_score || detection.box.Area() <= 0.f) continue;
+    if (IsPartOfAnotherDetection(detections, d, config)) continue;
     const BoundingBox2D box = ToDepthPixels(detection.box, frame.color, frame.depth);
     bool is_top = false;
     const std::vector<int> pixels = CropToBox(

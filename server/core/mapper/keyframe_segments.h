@@ -17,6 +17,12 @@ struct SegmentedDetection {
   std::vector<int> pixels;        ///< indices into the organized cloud
 };
 
+/// True when detection `d` is of one of MapperConfig::part_classes and its box lies
+/// part_inside_fraction inside the box, min_whole_to_part_area times larger, of another usable
+/// detection of one of whole_classes.
+[[nodiscard]] bool IsPartOfAnotherDetection(const std::vector<Detection>& detections, std::size_t d,
+                                            const MapperConfig& config);
+
 /// Scales a colour-image box into depth-image pixels.
 [[nodiscard]] BoundingBox2D ToDepthPixels(const BoundingBox2D& box, const ColorImage& color,
                                           const DepthImage& depth);
@@ -27,7 +33,8 @@ struct SegmentedDetection {
 /// two same-class detections with distinct boxes (IoU below MapperConfig::split_max_box_iou)
 /// share the segment out by box; detections of a stack class (MapperConfig::stack_classes) that
 /// pick one segment cut it by height above the supporting plane under it, one layer per box at a
-/// distinct height; and nothing fuses into a surface-class (table) observation.
+/// distinct height; and nothing fuses into a surface-class (table) observation. Detections of a
+/// part inside a whole (IsPartOfAnotherDetection) are left out.
 /// `index` is IndexSegments(segmentation, cloud_C), built once per keyframe for this and
 /// UnclassifiedSegments.
 [[nodiscard]] std::vector<SegmentedDetection> SegmentDetections(

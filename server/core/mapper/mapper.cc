@@ -240,6 +240,14 @@ bool MapperConfig::IsValid(std::string* why) const {
     *why = "MapperConfig.min_segment_box_fill must be in [0, 1]";
     return false;
   }
+  if (!(part_inside_fraction > 0.f && part_inside_fraction <= 1.f)) {
+    *why = "MapperConfig.part_inside_fraction must be in (0, 1]";
+    return false;
+  }
+  if (!(min_whole_to_part_area >= 1.f)) {
+    *why = "MapperConfig.min_whole_to_part_area must be >= 1";
+    return false;
+  }
   return true;
 }
 

@@ -129,6 +129,19 @@ struct MapperConfig {
   /// a fridge the segmentation did not separate, or whatever a spurious box landed on. Such an
   /// observation would start an object with a model of the wrong thing.
   float min_segment_box_fill = 0.2f;
+  /// A detection of one of part_classes whose box lies at least part_inside_fraction inside the
+  /// box of a detection of one of whole_classes in the same image shows a part of that object,
+  /// and is dropped: a detector boxes a laptop's keyboard deck as a keyboard about as often as
+  /// it boxes the laptop, and those boxes would make a keyboard out of the laptop, or out of the
+  /// desk under it once the laptop's detection has taken the laptop's segment. The whole's box
+  /// must also be at least min_whole_to_part_area times the part's: two boxes of about one size
+  /// are two guesses at one object (a keyboard boxed as a laptop as well), which fuse as one
+  /// observation with both scores. An external keyboard is wider than a laptop and lies in
+  /// front of it, so its box is not inside the laptop's.
+  std::vector<int> part_classes = {66 /* keyboard */};
+  std::vector<int> whole_classes = {63 /* laptop */};
+  float part_inside_fraction = 0.8f;
+  float min_whole_to_part_area = 1.5f;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };

@@ -27,6 +27,15 @@ struct BoundingBox2D {
   return united > 0.f ? intersection / united : 0.f;
 }
 
+/// Share of `part`'s area that lies inside `whole`; 0 when `part` is empty.
+[[nodiscard]] inline float BoxInsideFraction(const BoundingBox2D& part,
+                                             const BoundingBox2D& whole) {
+  const BoundingBox2D overlap{std::max(part.x_min, whole.x_min), std::max(part.y_min, whole.y_min),
+                              std::min(part.x_max, whole.x_max), std::min(part.y_max, whole.y_max)};
+  const float area = part.Area();
+  return area > 0.f ? overlap.Area() / area : 0.f;
+}
+
 /// One object detection on a colour image.
 struct Detection {
   BoundingBox2D box;  ///< in colour-image pixels
