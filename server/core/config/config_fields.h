@@ -65,6 +65,8 @@ void VisitMapModel(MapperConfig* m, Visitor& v) {
   v("model_voxel_size_m", &m->objects.model_voxel_size_m);
   v("min_voxel_observations", &m->objects.min_voxel_observations);
   v("resolve_shared_voxels", &m->objects.resolve_shared_voxels);
+  v("thin_classes", &m->objects.thin_classes);
+  v("max_thin_thickness_m", &m->objects.max_thin_thickness_m);
   OccupancyConfig& o = m->occupancy;
   v.Section("occupancy");
   v("resolution_m", &o.resolution_m);

@@ -1,5 +1,6 @@
 #include "objects/object_map.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -17,6 +18,32 @@ ColoredPoints Transform(const ColoredPoints& points_C, const Eigen::Isometry3d& 
   return points_W;
 }
 
+// The spread of the model along its least principal axis, 5th to 95th percentile: a few stray
+// voxels (a border pixel, a slice of the surface under it) do not make a phone thick.
+float ThicknessOf(const VoxelModel& model, const Eigen::Vector3f& centroid) {
+  Eigen::Matrix3f covariance = Eigen::Matrix3f::Zero();
+  model.ForEachPoint([&](const Eigen::Vector3f& p) {
+    const Eigen::Vector3f d = p - centroid;
+    covariance += d * d.transpose();
+    return true;
+  });
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3f> solver(covariance);
+  const Eigen::Vector3f axis = solver.eigenvectors().col(0);  // eigenvalues ascend
+  std::vector<float> along;
+  along.reserve(model.size());
+  model.ForEachPoint([&](const Eigen::Vector3f& p) {
+    along.push_back(axis.dot(p - centroid));
+    return true;
+  });
+  const auto at = [&](float q) {
+    const auto k = static_cast<std::ptrdiff_t>(q * static_cast<float>(along.size() - 1));
+    std::nth_element(along.begin(), along.begin() + k, along.end());
+    return along[static_cast<std::size_t>(k)];
+  };
+  const float low = at(0.05f);
+  return at(0.95f) - low;
+}
+
 }  // namespace
 
 bool ObjectMapConfig::IsValid(std::string* why) const {
@@ -28,6 +55,16 @@ bool ObjectMapConfig::IsValid(std::string* why) const {
     *why = "ObjectMapConfig.min_voxel_observations must be >= 1";
     return false;
   }
+  if (!(max_thin_thickness_m > 0.f)) {
+    *why = "ObjectMapConfig.max_thin_thickness_m must be positive";
+    return false;
+  }
+  for (int class_id : thin_classes) {
+    if (class_id < 0 || class_id >= kNumCocoClasses) {
+      *why = "ObjectMapConfig.thin_classes holds a class id outside 0..79";
+      return false;
+    }
+  }
   return true;
 }
 
@@ -37,9 +74,17 @@ bool IsUnclassified(const ObjectObservation& observation) {
 }
 
 int MapObject::Label() const {
-  const auto best = std::max_element(accumulated_scores.begin(), accumulated_scores.end());
-  if (!(*best > 0.f)) return kUnknownClassId;
-  return static_cast<int>(best - accumulated_scores.begin());
+  int best = kUnknownClassId, best_allowed = kUnknownClassId;
+  for (int c = 0; c < kNumCocoClasses; ++c) {
+    const float score = accumulated_scores[c];
+    if (!(score > 0.f)) continue;
+    if (best == kUnknownClassId || score > accumulated_scores[best]) best = c;
+    if (!ruled_out_classes[c] &&
+        (best_allowed == kUnknownClassId || score > accumulated_scores[best_allowed])) {
+      best_allowed = c;
+    }
+  }
+  return best_allowed != kUnknownClassId ? best_allowed : best;
 }
 
 float MapObject::Confidence() const {
@@ -48,7 +93,16 @@ float MapObject::Confidence() const {
   const auto named = std::count_if(observations.begin(), observations.end(),
                                    [](const ObjectObservation& o) { return !IsUnclassified(o); });
   if (named == 0) return 0.f;
-  return accumulated_scores[label] / static_cast<float>(named);
+  const float confidence = accumulated_scores[label] / static_cast<float>(named);
+  // The score the detections gave to classes the shape rules out goes to the others in
+  // proportion: a mouse named a phone in half its views is a mouse in all of them.
+  float total = 0.f, allowed = 0.f;
+  for (int c = 0; c < kNumCocoClasses; ++c) {
+    total += accumulated_scores[c];
+    if (!ruled_out_classes[c]) allowed += accumulated_scores[c];
+  }
+  if (ruled_out_classes[label] || !(allowed > 0.f) || !(allowed < total)) return confidence;
+  return std::min(1.f, confidence * total / allowed);
 }
 
 std::vector<KeyframeId> MapObject::Keyframes() const {
@@ -95,6 +149,7 @@ void ObjectMap::UpdateBounds(MapObject* object) {
   object->version = ++last_model_version_;
   if (object->model_W.empty()) {
     object->centroid_W = object->min_W = object->max_W = Eigen::Vector3f::Zero();
+    object->ruled_out_classes.reset();
     return;
   }
   Eigen::Vector3f sum = Eigen::Vector3f::Zero();
@@ -109,6 +164,17 @@ void ObjectMap::UpdateBounds(MapObject* object) {
   object->centroid_W = sum / static_cast<float>(object->model_W.size());
   object->min_W = lo;
   object->max_W = hi;
+  UpdateRuledOutClasses(object);
+}
+
+void ObjectMap::UpdateRuledOutClasses(MapObject* object) const {
+  object->ruled_out_classes.reset();
+  const bool thin_class_scored =
+      std::any_of(config_.thin_classes.begin(), config_.thin_classes.end(),
+                  [&](int class_id) { return object->accumulated_scores[class_id] > 0.f; });
+  if (!thin_class_scored || object->model_W.empty()) return;
+  if (ThicknessOf(object->model_W, object->centroid_W) <= config_.max_thin_thickness_m) return;
+  for (int class_id : config_.thin_classes) object->ruled_out_classes.set(class_id);
 }
 
 bool ObjectMap::Merge(ObjectId kept, ObjectId absorbed) {

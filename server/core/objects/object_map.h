@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <array>
+#include <bitset>
 #include <functional>
 #include <map>
 #include <optional>
@@ -49,6 +50,13 @@ struct ObjectMapConfig {
   /// published only with the object whose views reached it in the larger share: each keeps its
   /// own surface. The association keeps matching against every voxel.
   bool resolve_shared_voxels = true;
+  /// Classes thin whichever way they lie (a phone, a remote: at most 2.5 cm), and the thickness
+  /// their models may measure: the spread (5th to 95th percentile) of the model along its least
+  /// principal axis. Detectors often name a mouse (about 4 cm tall) a phone or a remote; a model
+  /// thicker than this rules those classes out, and the label is the best of the other classes
+  /// its detections gave (a size prior, on the one extent that does not depend on the view).
+  std::vector<int> thin_classes = {67 /* cell phone */, 65 /* remote */};
+  float max_thin_thickness_m = 0.03f;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
@@ -67,12 +75,17 @@ struct MapObject {
   /// rebuild. Unique within an ObjectMap's life, also across Restore: an id that now names
   /// another model never shows a version a cache saw before.
   std::uint64_t version = 0;
+  /// Classes the model's shape rules out (ObjectMapConfig::thin_classes on a thick model).
+  std::bitset<kNumCocoClasses> ruled_out_classes;
 
-  /// argmax_c of the accumulated scores; kUnknownClassId while no detection has named it (only
-  /// unclassified observations).
+  /// argmax_c of the accumulated scores over the classes not ruled out (all of them when every
+  /// scored class is); kUnknownClassId while no detection has named it (only unclassified
+  /// observations).
   [[nodiscard]] int Label() const;
   /// max_c s_c / n with n the number of observations that a detection named (paper Sec. III-D;
-  /// a view that only segmented it says nothing of its class); 0 for an unknown object.
+  /// a view that only segmented it says nothing of its class); 0 for an unknown object. When
+  /// the shape rules classes out, s_c is scaled by (sum of all scores) / (sum of the allowed
+  /// classes' scores): the ruled-out share goes to the remaining classes in proportion.
   [[nodiscard]] float Confidence() const;
   /// Keyframes that saw this object, ascending, without repeats.
   [[nodiscard]] std::vector<KeyframeId> Keyframes() const;
@@ -137,6 +150,8 @@ class ObjectMap {
   void AddToModel(MapObject* object, const ObjectObservation& observation,
                   const Eigen::Isometry3d& T_W_C);
   void UpdateBounds(MapObject* object);
+  // Sets MapObject::ruled_out_classes from the model's shape (ObjectMapConfig::thin_classes).
+  void UpdateRuledOutClasses(MapObject* object) const;
   void InsertIntoModel(MapObject* object, const ObjectObservation& observation,
                        const Eigen::Isometry3d& T_W_C);
   void RebuildObject(MapObject* object, const KeyframePoseLookup& pose_of);
