@@ -223,7 +223,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "association_bench: %s\n", why.c_str());
     return 1;
   }
-  objmap::Mapper mapper{objmap::MapperConfig{}};
+  const objmap::MapperConfig mapper_config;
+  objmap::Mapper mapper{mapper_config};
   objmap::SequenceRunConfig run_config;
   run_config.max_frames = static_cast<std::size_t>(frames);
   objmap::SequenceRunReport report;

@@ -148,8 +148,9 @@ int main(int argc, char** argv) {
     std::printf("NOTE: no detector model at %s: the map will have no objects\n",
                 detector_config.model_path.c_str());
   }
+  const MapServerConfig server_config;
   std::unique_ptr<MapServer> map_server =
-      MapServer::Open(MapServerConfig{}, db.string(), std::move(detector), &why);
+      MapServer::Open(server_config, db.string(), std::move(detector), &why);
   if (!map_server) {
     std::fprintf(stderr, "server_bench: %s\n", why.c_str());
     return 1;

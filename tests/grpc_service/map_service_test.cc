@@ -41,7 +41,8 @@ class MapServiceTest : public ::testing::Test {
 
   void Start(int max_message_mb) {
     std::string why;
-    map_server_ = MapServer::Open(MapServerConfig{}, db_path_, nullptr, &why);
+    const MapServerConfig server_config;
+    map_server_ = MapServer::Open(server_config, db_path_, nullptr, &why);
     ASSERT_TRUE(map_server_) << why;
     service_ = std::make_unique<MapServiceImpl>(*map_server_);
     GrpcServerOptions options;

@@ -46,7 +46,8 @@ class MapServerScene : public ::testing::Test {
 
   std::unique_ptr<MapServer> OpenServer() const {
     std::string why;
-    auto server = MapServer::Open(MapServerConfig{}, db_path_, nullptr, &why);
+    const MapServerConfig server_config;
+    auto server = MapServer::Open(server_config, db_path_, nullptr, &why);
     EXPECT_TRUE(server) << why;
     return server;
   }

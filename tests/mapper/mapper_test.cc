@@ -7,12 +7,16 @@
 #include <cmath>
 #include <limits>
 
+#include "mapper/keyframe_segments.h"
 #include "mapper/map_export.h"
 #include "test_scenes.h"
 #include "types/coco_classes.h"
 
 namespace objmap {
 namespace {
+
+// The mappers of these tests run at the defaults.
+const MapperConfig kDefaultConfig;
 
 using testing::SceneBox;
 
@@ -96,7 +100,7 @@ class MapperScene : public ::testing::Test {
 };
 
 TEST_F(MapperScene, TwoCupsSeenThriceAreTwoObjects) {
-  Mapper mapper{MapperConfig{}};
+  Mapper mapper{kDefaultConfig};
   MapAllViews(&mapper);
   ASSERT_EQ(mapper.objects().size(), 2u);
   for (const auto& [id, object] : mapper.objects().objects()) {
@@ -152,7 +156,7 @@ TEST_F(MapperScene, ObjectsRarelyDetectedWhereSeenAreLeftOutOfTheInventory) {
 }
 
 TEST_F(MapperScene, OneGoodViewIsEnoughEvidence) {
-  Mapper mapper{MapperConfig{}};
+  Mapper mapper{kDefaultConfig};
   KeyframeResult result;
   std::string why;
   ASSERT_TRUE(mapper.AddKeyframe(Frame(0), CupDetections(0), &result, &why)) << why;
@@ -172,7 +176,7 @@ TEST_F(MapperScene, RepeatedFramesOfOneViewCountOnceForAndAgainstAnObject) {
   // Every-frame sampling: each of the three eyes gives five keyframes (a few millimetres
   // apart). The second cup is detected in the five frames of the first eye and missed in the
   // ten others: one view for it, two against, as with one keyframe per eye.
-  Mapper dense{MapperConfig{}};
+  Mapper dense{kDefaultConfig};
   for (int keyframe = 0; keyframe < 15; ++keyframe) {
     const int view = keyframe / 5;
     const RgbdFrame frame = NearFrame(keyframe);
@@ -211,7 +215,7 @@ TEST_F(MapperScene, RepeatedFramesOfOneViewCountOnceForAndAgainstAnObject) {
 }
 
 TEST_F(MapperScene, OccupancyHoldsStructureNotObjects) {
-  Mapper mapper{MapperConfig{}};
+  Mapper mapper{kDefaultConfig};
   MapAllViews(&mapper);
   const OccupancyMap& occupancy = mapper.occupancy();
   // The wall is visible only below ~0.9 m: higher, it is out of the field of view.
@@ -223,7 +227,7 @@ TEST_F(MapperScene, OccupancyHoldsStructureNotObjects) {
 }
 
 TEST_F(MapperScene, PoseUpdateRegeneratesObjectsAndOccupancy) {
-  Mapper mapper{MapperConfig{}};
+  Mapper mapper{kDefaultConfig};
   MapAllViews(&mapper);
   std::map<ObjectId, Eigen::Vector3f> before;
   for (const auto& [id, object] : mapper.objects().objects()) before[id] = object.centroid_W;
@@ -267,7 +271,7 @@ TEST_F(MapperScene, PoseUpdateRegeneratesObjectsAndOccupancy) {
 // became two more objects. A loop closure that corrects only that keyframe is not rigid: the
 // association is replayed with the corrected pose and the third view's cups join the first two.
 TEST_F(MapperScene, NonRigidCorrectionReassociatesAndKeepsTheIdsOfTheObjectsThatStay) {
-  Mapper mapper{MapperConfig{}};
+  Mapper mapper{kDefaultConfig};
   MapWithTheThirdViewDrifted(&mapper);
   ASSERT_EQ(mapper.objects().size(), 4u) << "the drifted view's cups are two more objects";
   std::vector<ObjectId> seen_twice;
@@ -334,7 +338,7 @@ TEST_F(MapperScene, CorrectingAFewKeyframesRebuildsOnlyWhereTheySeeWithTheSameMa
 }
 
 TEST_F(MapperScene, RestoreLoadsAUsableCheckpointAndIntegratesOnlyTheLaterKeyframes) {
-  Mapper live{MapperConfig{}};
+  Mapper live{kDefaultConfig};
   OccupancyCheckpoint after_two;
   for (int view = 0; view < 3; ++view) {
     KeyframeResult result;
@@ -356,7 +360,7 @@ TEST_F(MapperScene, RestoreLoadsAUsableCheckpointAndIntegratesOnlyTheLaterKeyfra
   };
   const std::string live_state = live.occupancy().WriteState();
 
-  Mapper from_checkpoint{MapperConfig{}};
+  Mapper from_checkpoint{kDefaultConfig};
   RestoreOutcome outcome =
       from_checkpoint.Restore(records(), observations(), live.objects().next_id(), &after_two);
   EXPECT_TRUE(outcome.from_checkpoint) << outcome.checkpoint_refused;
@@ -364,7 +368,7 @@ TEST_F(MapperScene, RestoreLoadsAUsableCheckpointAndIntegratesOnlyTheLaterKeyfra
   // The same OctoMap, log-odds included, as the mapper that integrated all three.
   EXPECT_EQ(from_checkpoint.occupancy().WriteState(), live_state);
 
-  Mapper without{MapperConfig{}};
+  Mapper without{kDefaultConfig};
   outcome = without.Restore(records(), observations(), live.objects().next_id());
   EXPECT_FALSE(outcome.from_checkpoint);
   EXPECT_EQ(outcome.keyframes_integrated, 3);
@@ -374,7 +378,7 @@ TEST_F(MapperScene, RestoreLoadsAUsableCheckpointAndIntegratesOnlyTheLaterKeyfra
   // rebuilt from every keyframe.
   OccupancyCheckpoint stale = after_two;
   stale.keyframe_poses[2].translation().x() += 0.05;
-  Mapper refused{MapperConfig{}};
+  Mapper refused{kDefaultConfig};
   outcome = refused.Restore(records(), observations(), live.objects().next_id(), &stale);
   EXPECT_FALSE(outcome.from_checkpoint);
   EXPECT_EQ(outcome.checkpoint_refused, "keyframe 2 moved since the checkpoint");
@@ -399,7 +403,7 @@ TEST_F(MapperScene, FlatKeyboardAndTableBecomeObjects) {
   boxes_.push_back({{-0.35, -0.2, 0.705}, {-0.2, 0.2, 0.713}, {20, 20, 20}});  // 8 mm keyboard
   for (const float table_score : {0.3f, 0.9f}) {
     SCOPED_TRACE("table score " + std::to_string(table_score));
-    Mapper mapper{MapperConfig{}};
+    Mapper mapper{kDefaultConfig};
     for (int view = 0; view < 3; ++view) {
       std::vector<Detection> detections = CupDetections(view);
       detections.push_back({Project(boxes_[4], Pose(view)), kKeyboard, 0.4f});
@@ -520,7 +524,7 @@ TEST_F(MapperScene, TwoMonitorsSideBySideStayTwo) {
   const int kTv = CocoClassId("tv");
   boxes_[1] = {{0.30, -0.50, 0.72}, {0.34, 0.0, 1.02}, {20, 20, 20}};
   boxes_[2] = {{0.30, 0.0, 0.72}, {0.34, 0.50, 1.02}, {20, 20, 20}};
-  Mapper mapper{MapperConfig{}};
+  Mapper mapper{kDefaultConfig};
   for (int view = 0; view < 3; ++view) {
     KeyframeResult result;
     std::string why;
@@ -559,7 +563,7 @@ TEST_F(MapperScene, AFridgeSeenInPartsIsOneObject) {
       {{-0.25, -1.2, 1.5}, front + Eigen::Vector3d(0, 0, 1.35)},
       {{-0.25, -1.2, 0.6}, front + Eigen::Vector3d(0, 0, 0.45)},
   };
-  Mapper mapper{MapperConfig{}};
+  Mapper mapper{kDefaultConfig};
   for (std::size_t view = 0; view < eyes_targets.size(); ++view) {
     const Eigen::Isometry3d pose =
         testing::LookAt(eyes_targets[view].first, eyes_targets[view].second);
@@ -589,7 +593,7 @@ TEST_F(MapperScene, AMouseOnTheDeskIsMapped) {
   const int kMouse = CocoClassId("mouse");
   const SceneBox mouse{{-0.25, 0.35, 0.70}, {-0.19, 0.45, 0.735}, {60, 60, 60}};
   boxes_.push_back(mouse);
-  Mapper mapper{MapperConfig{}};
+  Mapper mapper{kDefaultConfig};
   for (int view = 0; view < 3; ++view) {
     std::vector<Detection> detections = CupDetections(view);
     detections.push_back({Project(mouse, Pose(view)), kMouse, 0.6f});
@@ -608,6 +612,90 @@ TEST_F(MapperScene, AMouseOnTheDeskIsMapped) {
     EXPECT_LT(object->max_W.z(), 0.75) << "the mouse, not something standing above it";
   }
   EXPECT_EQ(mice, 1);
+}
+
+// A detector names a mouse a phone or a remote about as often as a mouse. The mouse's model is
+// 4 cm thick, which no phone or remote is: it is labelled a mouse, confidently enough for the
+// inventory. A phone lying flat, named a phone, stays a phone.
+TEST_F(MapperScene, AMouseNamedAPhoneMoreOftenIsAMouseAndAFlatPhoneStaysAPhone) {
+  const int kMouse = CocoClassId("mouse"), kPhone = CocoClassId("cell phone");
+  const int kRemote = CocoClassId("remote");
+  const SceneBox mouse{{-0.25, 0.35, 0.70}, {-0.19, 0.46, 0.74}, {60, 60, 60}};
+  const SceneBox phone{{-0.30, -0.50, 0.70}, {-0.23, -0.35, 0.708}, {20, 20, 20}};
+  boxes_.push_back(mouse);
+  boxes_.push_back(phone);
+  Mapper mapper{kDefaultConfig};
+  for (int view = 0; view < 3; ++view) {
+    std::vector<Detection> detections = CupDetections(view);
+    const BoundingBox2D mouse_box = Project(mouse, Pose(view));
+    detections.push_back({mouse_box, kPhone, 0.4f});
+    detections.push_back({mouse_box, kRemote, 0.2f});
+    detections.push_back({mouse_box, kMouse, 0.3f});
+    detections.push_back({Project(phone, Pose(view)), kPhone, 0.5f});
+    KeyframeResult result;
+    std::string why;
+    ASSERT_TRUE(mapper.AddKeyframe(Frame(view), detections, &result, &why)) << why;
+  }
+  const MapObject* mapped_mouse = nullptr;
+  const MapObject* mapped_phone = nullptr;
+  for (const auto& [id, object] : mapper.objects().objects()) {
+    if (object.centroid_W.y() > 0.3) mapped_mouse = &object;
+    if (object.centroid_W.y() < -0.3) mapped_phone = &object;
+  }
+  ASSERT_NE(mapped_mouse, nullptr);
+  ASSERT_NE(mapped_phone, nullptr);
+  EXPECT_NEAR(mapped_mouse->accumulated_scores[kPhone], 1.2f, 1e-4) << "the scores are kept";
+  EXPECT_TRUE(mapped_mouse->ruled_out_classes[kPhone]);
+  EXPECT_TRUE(mapped_mouse->ruled_out_classes[kRemote]);
+  EXPECT_EQ(mapped_mouse->Label(), kMouse);
+  // 0.3 per view, and the phone's and remote's share goes to the mouse: 0.3 x (0.4+0.2+0.3) / 0.3.
+  EXPECT_NEAR(mapped_mouse->Confidence(), 0.9f, 1e-3);
+  EXPECT_FALSE(mapped_phone->ruled_out_classes[kPhone]);
+  EXPECT_EQ(mapped_phone->Label(), kPhone);
+  const std::vector<const MapObject*> confirmed = mapper.ConfirmedObjects();
+  EXPECT_NE(std::find(confirmed.begin(), confirmed.end(), mapped_mouse), confirmed.end());
+  EXPECT_NE(std::find(confirmed.begin(), confirmed.end(), mapped_phone), confirmed.end());
+
+  // Switched off (no thin classes), the mouse is a phone as the scores say.
+  MapperConfig plain;
+  plain.objects.thin_classes.clear();
+  Mapper plain_mapper{plain};
+  for (int view = 0; view < 3; ++view) {
+    std::vector<Detection> detections = CupDetections(view);
+    const BoundingBox2D mouse_box = Project(mouse, Pose(view));
+    detections.push_back({mouse_box, kPhone, 0.5f});
+    detections.push_back({mouse_box, kMouse, 0.3f});
+    KeyframeResult result;
+    std::string why;
+    ASSERT_TRUE(plain_mapper.AddKeyframe(Frame(view), detections, &result, &why)) << why;
+  }
+  EXPECT_EQ(ObjectsLabelled(plain_mapper, kPhone).size(), 1u);
+  EXPECT_TRUE(ObjectsLabelled(plain_mapper, kMouse).empty());
+}
+
+TEST(PartDetections, AKeyboardBoxWellInsideALargerLaptopBoxIsTheLaptopsDeck) {
+  const int kKeyboard = CocoClassId("keyboard"), kLaptop = CocoClassId("laptop");
+  const MapperConfig config;
+  const BoundingBox2D laptop{100, 100, 240, 210};
+  const BoundingBox2D deck{115, 160, 225, 205};
+  std::vector<Detection> detections = {{laptop, kLaptop, 0.6f}, {deck, kKeyboard, 0.4f}};
+  EXPECT_TRUE(IsPartOfAnotherDetection(detections, 1, config));
+  EXPECT_FALSE(IsPartOfAnotherDetection(detections, 0, config)) << "a laptop is no part";
+  // The same box named both: two guesses at one object, which fuse as one observation.
+  detections[1].box = laptop;
+  EXPECT_FALSE(IsPartOfAnotherDetection(detections, 1, config));
+  // An external keyboard in front of the laptop: its box reaches well below the laptop's.
+  detections[1].box = {90, 180, 250, 260};
+  EXPECT_FALSE(IsPartOfAnotherDetection(detections, 1, config));
+  // A laptop box too weak to be used decides nothing.
+  detections[1].box = deck;
+  detections[0].score = config.min_detection_score / 2;
+  EXPECT_FALSE(IsPartOfAnotherDetection(detections, 1, config));
+  // No part classes: every keyboard is a keyboard.
+  MapperConfig no_parts;
+  no_parts.part_classes.clear();
+  detections[0].score = 0.6f;
+  EXPECT_FALSE(IsPartOfAnotherDetection(detections, 1, no_parts));
 }
 
 // Three books of one footprint stacked on the table are one convex segment in every view, and
@@ -640,7 +728,7 @@ TEST_F(MapperScene, StackedBooksAreCutByHeightAndStayThree) {
     return mapper;
   };
   std::vector<const MapObject*> books;
-  const auto cut = map_with(MapperConfig{}.stack_classes, &books);
+  const auto cut = map_with(kDefaultConfig.stack_classes, &books);
   ASSERT_EQ(books.size(), 3u);
   for (int b = 0; b < 3; ++b) {
     SCOPED_TRACE("book " + std::to_string(b));
@@ -688,9 +776,9 @@ TEST_F(MapperScene, ASegmentSpanningLittleOfItsBoxIsNotAnObservation) {
     return result.detections_used;
   };
   EXPECT_EQ(used_with(0.f), 1) << "without the test the cup's segment becomes a bottle";
-  EXPECT_EQ(used_with(MapperConfig{}.min_segment_box_fill), 0);
+  EXPECT_EQ(used_with(kDefaultConfig.min_segment_box_fill), 0);
   // The cups' own boxes are filled: both are used (MapAllViews checks it in every view).
-  Mapper mapper{MapperConfig{}};
+  Mapper mapper{kDefaultConfig};
   MapAllViews(&mapper);
   MapperConfig bad;
   bad.min_segment_box_fill = 1.5f;
@@ -719,7 +807,7 @@ TEST_F(MapperScene, AFlatObjectOnASurfaceThatIsNoPlaneIsThePartItsBoxCovers) {
     }
     return mapper;
   };
-  const auto with = map_screen(MapperConfig{}.flat_classes);
+  const auto with = map_screen(kDefaultConfig.flat_classes);
   ASSERT_EQ(with->objects().size(), 1u);
   const MapObject& tv = with->objects().objects().begin()->second;
   EXPECT_EQ(tv.observations.size(), 3u);
@@ -758,7 +846,7 @@ TEST_F(MapperScene, ATableIsItsWholeTopNotAChairBackOrANearerTable) {
     box.y_max = std::min(box.y_max, static_cast<float>(K_.height - 1));
     return box;
   };
-  Mapper mapper{MapperConfig{}};
+  Mapper mapper{kDefaultConfig};
   for (int view = 0; view < 3; ++view) {
     const BoundingBox2D front = table_box(boxes_[0], view);
     const BoundingBox2D back = table_box(back_table, view);
@@ -793,7 +881,7 @@ TEST_F(MapperScene, ATableIsItsWholeTopNotAChairBackOrANearerTable) {
 TEST_F(MapperScene, AnUndetectedThingOnTheTableIsAnUnknownObjectUntilADetectionNamesIt) {
   const SceneBox thing = kUnnamedBox;
   boxes_.push_back(thing);
-  Mapper mapper{MapperConfig{}};
+  Mapper mapper{kDefaultConfig};
   for (int view = 0; view < 3; ++view) {
     KeyframeResult result;
     std::string why;
@@ -843,7 +931,7 @@ TEST_F(MapperScene, AnUndetectedThingOnTheTableIsAnUnknownObjectUntilADetectionN
 // copy of the unnamed box joins it again, and the object keeps its id.
 TEST_F(MapperScene, ANonRigidCorrectionReassociatesAnUnknownObjectLikeTheNamedOnes) {
   boxes_.push_back(kUnnamedBox);
-  Mapper mapper{MapperConfig{}};
+  Mapper mapper{kDefaultConfig};
   MapWithTheThirdViewDrifted(&mapper);
   auto unknown = ObjectsLabelled(mapper, kUnknownClassId);
   ASSERT_EQ(unknown.size(), 2u) << "the drifted view's box lands beside the first";
@@ -865,7 +953,7 @@ TEST_F(MapperScene, ANonRigidCorrectionReassociatesAnUnknownObjectLikeTheNamedOn
 
 TEST_F(MapperScene, AnUnknownObjectNeedsSeveralViewsAndCanBeSwitchedOff) {
   boxes_.push_back(kUnnamedBox);
-  Mapper mapper{MapperConfig{}};
+  Mapper mapper{kDefaultConfig};
   for (int view = 0; view < 2; ++view) {
     KeyframeResult result;
     std::string why;
@@ -893,7 +981,7 @@ TEST_F(MapperScene, AnUnknownObjectNeedsSeveralViewsAndCanBeSwitchedOff) {
 // detector missed it.
 TEST_F(MapperScene, OnlyFreeStandingUnnamedThingsBecomeUnknownObjects) {
   boxes_.push_back({{0.15, -0.05, 0.90}, {0.27, 0.05, 1.00}, {40, 160, 40}});  // floating
-  Mapper mapper{MapperConfig{}};
+  Mapper mapper{kDefaultConfig};
   for (int view = 0; view < 3; ++view) {
     std::vector<Detection> detections = CupDetections(view);
     if (view == 2) detections.pop_back();  // the second cup missed in the last view
@@ -927,7 +1015,7 @@ TEST(UnknownObjects, LegsUnderASurfaceAreNoObjectsAndTouchingPartsAreOne) {
   const CameraIntrinsics K;
   const std::vector<Eigen::Vector3d> eyes = {
       {-1.2, 0.0, 1.3}, {-1.1, 0.4, 1.3}, {-1.1, -0.4, 1.35}};
-  Mapper mapper{MapperConfig{}};
+  Mapper mapper{kDefaultConfig};
   for (std::size_t view = 0; view < eyes.size(); ++view) {
     const Eigen::Isometry3d T_W_C = testing::LookAt(eyes[view], Eigen::Vector3d(0.5, 0.0, 0.2));
     KeyframeResult result;
@@ -946,7 +1034,7 @@ TEST(UnknownObjects, LegsUnderASurfaceAreNoObjectsAndTouchingPartsAreOne) {
 }
 
 TEST_F(MapperScene, BadInputIsRejectedAndChangesNothing) {
-  Mapper mapper{MapperConfig{}};
+  Mapper mapper{kDefaultConfig};
   std::string why;
   KeyframeResult result;
   RgbdFrame frame = Frame(0);

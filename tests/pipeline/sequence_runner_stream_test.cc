@@ -9,6 +9,9 @@
 namespace objmap {
 namespace {
 
+// The mappers of these tests run at the defaults.
+const MapperConfig kDefaultConfig;
+
 using testing::SceneBox;
 
 const std::vector<SceneBox> kBoxes = {{{-0.6, -0.8, 0.60}, {0.6, 0.8, 0.70}, {150, 100, 60}},
@@ -147,7 +150,7 @@ TEST(SequenceRunnerStream, StopOnBadFrameAndFailedStreamStopTheRun) {
   SequenceRunConfig config;
   config.stop_on_bad_frame = true;
   CupDetector detector;
-  Mapper mapper{MapperConfig{}};
+  Mapper mapper{kDefaultConfig};
   SequenceRunReport report;
   std::string why;
   auto stream = MakeSequenceStream(sequence);

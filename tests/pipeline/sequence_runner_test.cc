@@ -30,7 +30,8 @@ TEST(SequenceRunner, MapsChairsAndCupsOfRedkitchen) {
   SequenceRunConfig run;
   run.first_frame = 230;
   run.max_frames = 100;
-  Mapper mapper{MapperConfig{}};
+  const MapperConfig mapper_config;
+  Mapper mapper{mapper_config};
   SequenceRunReport report;
   std::size_t progress_calls = 0;
   ASSERT_TRUE(RunSequence(
@@ -61,7 +62,8 @@ TEST(SequenceRunner, RejectsAnEmptySelection) {
   ASSERT_NE(reader, nullptr) << why;
   SequenceRunConfig run;
   run.first_frame = 5000;
-  Mapper mapper{MapperConfig{}};
+  const MapperConfig mapper_config;
+  Mapper mapper{mapper_config};
   SequenceRunReport report;
   EXPECT_FALSE(RunSequence(*reader, nullptr, &mapper, run, nullptr, &report, &why));
   EXPECT_NE(why.find("no frames selected: first frame 5000 of 1000"), std::string::npos) << why;

@@ -78,14 +78,15 @@ struct MapObject {
   /// Classes the model's shape rules out (ObjectMapConfig::thin_classes on a thick model).
   std::bitset<kNumCocoClasses> ruled_out_classes;
 
-  /// argmax_c of the accumulated scores over the classes not ruled out (all of them when every
-  /// scored class is); kUnknownClassId while no detection has named it (only unclassified
-  /// observations).
+  /// argmax_c of the accumulated scores; kUnknownClassId while no detection has named it (only
+  /// unclassified observations). When the argmax is a class the shape rules out, the best
+  /// class it does not rule out, if that class got at least a quarter of the ruled-out one's score;
+  /// otherwise kUnknownClassId (the detections named only what it cannot be).
   [[nodiscard]] int Label() const;
   /// max_c s_c / n with n the number of observations that a detection named (paper Sec. III-D;
   /// a view that only segmented it says nothing of its class); 0 for an unknown object. When
-  /// the shape rules classes out, s_c is scaled by (sum of all scores) / (sum of the allowed
-  /// classes' scores): the ruled-out share goes to the remaining classes in proportion.
+  /// the label replaces a best class the shape rules out, s_c is scaled by (sum of all scores) /
+  /// (sum of the allowed classes' scores): the ruled-out share goes to the others in proportion.
   [[nodiscard]] float Confidence() const;
   /// Keyframes that saw this object, ascending, without repeats.
   [[nodiscard]] std::vector<KeyframeId> Keyframes() const;
