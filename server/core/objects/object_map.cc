@@ -50,6 +50,18 @@ float ThicknessOf(const VoxelModel& model, const Eigen::Vector3f& centroid) {
 // phone 3.0, remote 2.2, clock 0.3).
 constexpr float kMinRelabelShare = 0.25f;
 
+// The class with the highest positive accumulated score among those not `excluded` (the lowest
+// id on a tie); kUnknownClassId when none has scored.
+int BestScoredClass(const std::array<float, kNumCocoClasses>& scores,
+                    const std::bitset<kNumCocoClasses>& excluded) {
+  int best = kUnknownClassId;
+  for (int c = 0; c < kNumCocoClasses; ++c) {
+    if (excluded[c] || !(scores[c] > 0.f)) continue;
+    if (best == kUnknownClassId || scores[c] > scores[best]) best = c;
+  }
+  return best;
+}
+
 }  // namespace
 
 bool ObjectMapConfig::IsValid(std::string* why) const {
@@ -80,19 +92,11 @@ bool IsUnclassified(const ObjectObservation& observation) {
 }
 
 int MapObject::Label() const {
-  int best = kUnknownClassId, best_allowed = kUnknownClassId;
-  for (int c = 0; c < kNumCocoClasses; ++c) {
-    const float score = accumulated_scores[c];
-    if (!(score > 0.f)) continue;
-    if (best == kUnknownClassId || score > accumulated_scores[best]) best = c;
-    if (!ruled_out_classes[c] &&
-        (best_allowed == kUnknownClassId || score > accumulated_scores[best_allowed])) {
-      best_allowed = c;
-    }
-  }
+  const int best = BestScoredClass(accumulated_scores, {});
   if (best == kUnknownClassId || !ruled_out_classes[best]) return best;
   // The detector hesitated between the ruled-out class and this one; a class it gave in
   // passing is no name, and the object is what no detection named.
+  const int best_allowed = BestScoredClass(accumulated_scores, ruled_out_classes);
   if (best_allowed != kUnknownClassId &&
       accumulated_scores[best_allowed] >= kMinRelabelShare * accumulated_scores[best]) {
     return best_allowed;
@@ -110,14 +114,13 @@ float MapObject::Confidence() const {
   // Relabelled from a class the shape rules out: the score the detections gave to the ruled-out
   // classes goes to the others in proportion (a mouse named a phone in half its views is a
   // mouse in all of them). An object whose best class stands keeps the paper's confidence.
+  if (label == BestScoredClass(accumulated_scores, {})) return confidence;
   float total = 0.f, allowed = 0.f;
-  int best = label;
   for (int c = 0; c < kNumCocoClasses; ++c) {
     total += accumulated_scores[c];
     if (!ruled_out_classes[c]) allowed += accumulated_scores[c];
-    if (accumulated_scores[c] > accumulated_scores[best]) best = c;
   }
-  if (!ruled_out_classes[best] || !(allowed > 0.f) || !(allowed < total)) return confidence;
+  if (!(allowed > 0.f) || !(allowed < total)) return confidence;
   return std::min(1.f, confidence * total / allowed);
 }
 
