@@ -97,14 +97,20 @@ class MapServerScene : public ::testing::Test {
     }
   }
 
-  // The store's "pose update pending" mark, read on a connection of its own.
+  // The store's "pose update pending" mark, read on a plain SQLite connection of its own (a
+  // second store on a database in use is refused).
   bool StoredPoseUpdatePending() const {
-    std::string why;
-    auto store = KeyframeStore::Open(db_path_, KeyframeStoreConfig{}, &why);
-    EXPECT_TRUE(store) << why;
-    StoredMap stored;
-    EXPECT_TRUE(store && store->LoadAll(&stored, &why)) << why;
-    return stored.pose_update_pending;
+    sqlite3* db = nullptr;
+    EXPECT_EQ(sqlite3_open_v2(db_path_.c_str(), &db, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
+    sqlite3_stmt* query = nullptr;
+    EXPECT_EQ(sqlite3_prepare_v2(db, "SELECT value FROM meta WHERE key = 'pose_update_pending'",
+                                 -1, &query, nullptr),
+              SQLITE_OK)
+        << sqlite3_errmsg(db);
+    const bool pending = sqlite3_step(query) == SQLITE_ROW && sqlite3_column_int(query, 0) != 0;
+    sqlite3_finalize(query);
+    sqlite3_close(db);
+    return pending;
   }
 
   // Restarts the server on its file: the cups come back with their ids, observations and

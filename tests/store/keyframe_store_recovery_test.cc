@@ -65,6 +65,24 @@ class KeyframeStoreRecoveryTest : public testing::StoreTest {
   }
 };
 
+// A pose damaged on disk (NaN, or not a rotation) is reported with its keyframe, never loaded.
+TEST_F(KeyframeStoreRecoveryTest, ADamagedPoseIsReportedNotLoaded) {
+  const std::string path = Path();
+  CreateStore(path, 3);
+  // Identity, column-major little-endian doubles, with NaN as the x translation (entry 12).
+  std::string hex;
+  for (int i = 0; i < 16; ++i) {
+    hex += i == 12 ? "000000000000F87F" : (i % 5 == 0 ? "000000000000F03F" : "0000000000000000");
+  }
+  RunSql(path, "UPDATE keyframes SET T_W_C = X'" + hex + "' WHERE id = 2");
+  auto store = OpenStore(path);
+  ASSERT_NE(store, nullptr);
+  StoredMap map;
+  std::string why;
+  EXPECT_FALSE(store->LoadAll(&map, &why));
+  EXPECT_NE(why.find("keyframe 2: corrupt pose"), std::string::npos) << why;
+}
+
 TEST_F(KeyframeStoreRecoveryTest, RejectsATextFile) {
   std::ofstream(Path("notes.db")) << "These are not the keyframes you are looking for.\n";
   ExpectOpenFails(Path("notes.db"), "not a readable SQLite database");

@@ -3,6 +3,9 @@
 #include "store/keyframe_store.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <thread>
@@ -128,6 +131,63 @@ TEST_F(KeyframeStoreTest, ReopeningFindsTheSameMap) {
   ASSERT_NE(store, nullptr);
   EXPECT_EQ(store->NumKeyframes(), 3u);
   ExpectSameMap(before, Load(*store));
+}
+
+// One writer per database: a second store on a file in use is refused and names the process
+// that holds it; the file opens again once the first store is closed, or once its process died
+// without closing it.
+TEST_F(KeyframeStoreTest, ASecondStoreOnADatabaseInUseIsRefusedNamingItsHolder) {
+  auto first = OpenStore(Path());
+  ASSERT_NE(first, nullptr);
+  CommitSmallMap(first.get());
+  std::string why;
+  EXPECT_EQ(KeyframeStore::Open(Path(), KeyframeStoreConfig{}, &why), nullptr);
+  EXPECT_NE(why.find("in use by another objmap process (pid " + std::to_string(::getpid())),
+            std::string::npos)
+      << why;
+  EXPECT_NE(why.find(Path() + ".lock"), std::string::npos) << why;
+  EXPECT_NE(OpenStore(Path("other.db")), nullptr) << "other files are not locked";
+  first.reset();
+  auto again = OpenStore(Path());
+  ASSERT_NE(again, nullptr);
+  EXPECT_EQ(again->NumKeyframes(), 3u);
+  again.reset();
+
+  // A child opens the store and is killed (SIGKILL: nothing is closed by the process).
+  int ready[2];
+  ASSERT_EQ(::pipe(ready), 0);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    std::string child_why;
+    auto held = KeyframeStore::Open(Path(), KeyframeStoreConfig{}, &child_why);
+    const char byte = held ? 'y' : 'n';
+    (void)!::write(ready[1], &byte, 1);
+    ::pause();
+    ::_exit(0);
+  }
+  char byte = 0;
+  ASSERT_EQ(::read(ready[0], &byte, 1), 1);
+  ::close(ready[0]);
+  ::close(ready[1]);
+  ASSERT_EQ(byte, 'y');
+  EXPECT_EQ(KeyframeStore::Open(Path(), KeyframeStoreConfig{}, &why), nullptr);
+  EXPECT_NE(why.find("pid " + std::to_string(child)), std::string::npos) << why;
+  ::kill(child, SIGKILL);
+  ::waitpid(child, nullptr, 0);
+  EXPECT_NE(OpenStore(Path()), nullptr) << "the lock died with its process";
+}
+
+// The database holds the camera's images: it and its WAL are readable by the owner only.
+TEST_F(KeyframeStoreTest, DatabaseFilesAreCreatedOwnerOnly) {
+  auto store = OpenStore(Path());
+  ASSERT_NE(store, nullptr);
+  CommitSmallMap(store.get());
+  for (const std::string& file : {Path(), Path() + "-wal", Path() + ".lock"}) {
+    struct stat info {};
+    ASSERT_EQ(::stat(file.c_str(), &info), 0) << file;
+    EXPECT_EQ(info.st_mode & 0777, 0600u) << file;
+  }
 }
 
 TEST_F(KeyframeStoreTest, MergesMoveObservationsAndRemovalsDeleteThem) {

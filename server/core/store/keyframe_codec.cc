@@ -146,7 +146,8 @@ Bytes PackPose(const Eigen::Isometry3d& T) {
 bool UnpackPose(const std::uint8_t* data, std::size_t bytes, Eigen::Isometry3d* T) {
   if (bytes != 16 * sizeof(double)) return false;
   std::memcpy(T->matrix().data(), data, bytes);
-  return true;
+  // Every pose was validated when it was stored: anything else was damaged on disk.
+  return IsValidRigidTransform(T->matrix(), nullptr);
 }
 
 Bytes PackDetections(const std::vector<Detection>& detections) {

@@ -37,6 +37,7 @@ using Bytes = std::vector<std::uint8_t>;
 
 /// 16 doubles, column-major: exact round trip.
 [[nodiscard]] Bytes PackPose(const Eigen::Isometry3d& T);
+/// False when the blob has the wrong size or is not a finite rigid transform (damaged on disk).
 [[nodiscard]] bool UnpackPose(const std::uint8_t* data, std::size_t bytes, Eigen::Isometry3d* T);
 
 /// Per detection: box (4 float32), class (int32), score (float32).

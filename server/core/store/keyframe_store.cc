@@ -1,5 +1,11 @@
 #include "store/keyframe_store.h"
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <system_error>
 
@@ -34,6 +40,53 @@ void ReaderPool::Return(std::unique_ptr<Connection> connection) {
   connection->RollbackIfOpen();
   std::lock_guard<std::mutex> lock(mutex_);
   if (idle_.size() < kMaxIdleReaders) idle_.push_back(std::move(connection));
+}
+
+std::unique_ptr<WriterLock> WriterLock::Acquire(const std::string& lock_path, std::string* why) {
+  const int fd = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0600);
+  if (fd < 0) {
+    *why = "cannot open the lock file " + lock_path + ": " + std::strerror(errno);
+    return nullptr;
+  }
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    const int error = errno;
+    char holder[32] = {};
+    const ssize_t read_bytes = ::pread(fd, holder, sizeof(holder) - 1, 0);
+    ::close(fd);
+    if (error != EWOULDBLOCK) {
+      *why = "cannot lock " + lock_path + ": " + std::strerror(error);
+      return nullptr;
+    }
+    std::string pid(holder, read_bytes > 0 ? static_cast<std::size_t>(read_bytes) : 0);
+    while (!pid.empty() && (pid.back() == '\n' || pid.back() == ' ')) pid.pop_back();
+    *why = "the database is in use by another objmap process (" +
+           (pid.empty() ? std::string("pid unknown") : "pid " + pid) + ", holding " + lock_path +
+           "); one server per database";
+    return nullptr;
+  }
+  // The holder's pid, for the message above; the lock, not the file, is what counts.
+  const std::string pid = std::to_string(::getpid()) + "\n";
+  if (::ftruncate(fd, 0) != 0 ||
+      ::pwrite(fd, pid.data(), pid.size(), 0) != static_cast<ssize_t>(pid.size())) {
+    // Not fatal: the lock holds; only the message naming the holder is poorer.
+  }
+  return std::unique_ptr<WriterLock>(new WriterLock(fd));
+}
+
+WriterLock::~WriterLock() { ::close(fd_); }  // closing the descriptor releases the flock
+
+// Creates the database file readable and writable by its owner only (SQLite would use 0644);
+// SQLite gives its -wal and -shm files the database's permissions. An existing file is left as
+// it is: its owner chose its mode.
+bool CreateOwnerOnly(const std::string& path, std::string* why) {
+  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  if (fd >= 0) {
+    ::close(fd);  // an empty file is an empty SQLite database
+    return true;
+  }
+  if (errno == EEXIST) return true;
+  *why = path + ": cannot create: " + std::strerror(errno);
+  return false;
 }
 
 }  // namespace store_internal
@@ -71,6 +124,12 @@ std::unique_ptr<KeyframeStore> KeyframeStore::Open(const std::string& path,
     return nullptr;
   }
   std::unique_ptr<KeyframeStore> store(new KeyframeStore());
+  store->impl_->lock = store_internal::WriterLock::Acquire(path + ".lock", why);
+  if (!store->impl_->lock) {
+    *why = path + ": " + *why;
+    return nullptr;
+  }
+  if (!store_internal::CreateOwnerOnly(path, why)) return nullptr;
   store->impl_->path = path;
   store->impl_->config = config;
   store->impl_->writer = store_internal::OpenWriter(path, config, why);

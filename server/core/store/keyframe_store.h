@@ -120,9 +120,12 @@ class KeyframeStore {
   KeyframeStore(const KeyframeStore&) = delete;
   KeyframeStore& operator=(const KeyframeStore&) = delete;
 
-  /// Opens (creating when absent) the database at `path`. Returns nullptr and a reason naming
-  /// the file when it cannot be opened, is not an objmap database, is corrupt (integrity
-  /// check), or has a schema version this build does not know.
+  /// Opens (creating when absent, readable by its owner only: it holds the camera's images) the
+  /// database at `path`. Returns nullptr and a reason naming the file when it cannot be opened,
+  /// is not an objmap database, is corrupt (integrity check), has a schema version this build
+  /// does not know, or is open in another store: one writer per database, held by an exclusive
+  /// lock on `path`.lock for the life of the store (the system releases it when the process
+  /// ends, however it ends). The reason then names the process that holds it.
   static std::unique_ptr<KeyframeStore> Open(const std::string& path,
                                              const KeyframeStoreConfig& config, std::string* why);
 

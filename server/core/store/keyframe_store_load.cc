@@ -48,7 +48,7 @@ bool ReadKeyframeRow(const Statement& row, RawKeyframe* raw, std::string* why) {
   const std::uint8_t* detections = row.Blob(13, &detection_bytes);
   if (!store_internal::UnpackPose(pose, pose_bytes, &k.T_W_C) ||
       !store_internal::UnpackDetections(detections, detection_bytes, &k.detections)) {
-    *why = "keyframe " + std::to_string(k.id) + ": corrupt pose or detections blob";
+    *why = "keyframe " + std::to_string(k.id) + ": corrupt pose or detections blob (a pose must be a finite rigid transform)";
     return false;
   }
   raw->depth_png = CopyBlob(row, 10);
@@ -238,7 +238,7 @@ bool KeyframeStore::ListKeyframes(KeyframeId first_id, std::size_t max_count,
     std::size_t pose_bytes = 0;
     const std::uint8_t* pose = rows->Blob(3, &pose_bytes);
     if (!store_internal::UnpackPose(pose, pose_bytes, &summary.T_W_C)) {
-      *why = impl_->path + ": keyframe " + std::to_string(summary.id) + ": corrupt pose blob";
+      *why = impl_->path + ": keyframe " + std::to_string(summary.id) + ": corrupt pose blob (not a finite rigid transform)";
       return false;
     }
   }

@@ -49,10 +49,27 @@ class ReaderPool {
   std::vector<std::unique_ptr<Connection>> idle_;
 };
 
+/// An exclusive flock on a database's lock file, which holds the owner's pid: one store (and so
+/// one server) per database. Released when destroyed or when the process ends.
+class WriterLock {
+ public:
+  /// The lock on `lock_path` (created 0600), or nullptr and a reason naming the holder.
+  static std::unique_ptr<WriterLock> Acquire(const std::string& lock_path, std::string* why);
+  ~WriterLock();
+  WriterLock(const WriterLock&) = delete;
+  WriterLock& operator=(const WriterLock&) = delete;
+
+ private:
+  explicit WriterLock(int fd) : fd_(fd) {}
+  int fd_;
+};
+
 }  // namespace store_internal
 
 struct KeyframeStore::Impl {
   std::string path;
+  /// Taken before the database is opened, released after it is closed (declared first).
+  std::unique_ptr<store_internal::WriterLock> lock;
   KeyframeStoreConfig config;
   /// Serializes Commit on the one write connection.
   std::mutex write_mutex;
