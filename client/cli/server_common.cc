@@ -13,8 +13,10 @@ Json PointJson(const v1::Vec3& p) { return Json::array({p.x() + 0.0, p.y() + 0.0
 }  // namespace
 
 std::set<std::string> WithServerFlags(std::set<std::string> flags) {
-  flags.insert("--server");
-  flags.insert("--timeout");
+  for (const char* flag :
+       {"--server", "--timeout", "--tls-ca", "--tls-cert", "--tls-key", "--token-file"}) {
+    flags.insert(flag);
+  }
   return flags;
 }
 
@@ -25,6 +27,14 @@ std::unique_ptr<MapClient> MakeClient(Arguments& args, double default_timeout_s,
   if (options.deadline_s < 0.0) {
     args.SetError("--timeout expects seconds >= 0, got '" + args.Get("--timeout", "") + "'");
     options.deadline_s = default_timeout_s;
+  }
+  options.tls_ca_path = args.Get("--tls-ca", "");
+  options.tls_cert_path = args.Get("--tls-cert", "");
+  options.tls_key_path = args.Get("--tls-key", "");
+  const std::string token_file = args.Get("--token-file", "");
+  std::string why;
+  if (!token_file.empty() && !ReadTokenFile(token_file, &options.token, &why)) {
+    args.SetError("--token-file: " + why);
   }
   return std::make_unique<MapClient>(args.Get("--server", kDefaultServer), options);
 }

@@ -23,9 +23,13 @@ inline constexpr int kExitUsage = 2;  ///< bad arguments
 inline constexpr char kServerOptionsUsage[] =
     "  --server ADDR             server address (default 127.0.0.1:50051)\n"
     "  --timeout S               deadline of each call, seconds (default 30; export 120;\n"
-    "                            update-poses --wait 600; 0: none)\n";
+    "                            update-poses --wait 600; 0: none)\n"
+    "  --tls-ca FILE             connect over TLS, verifying the server against this CA (PEM)\n"
+    "  --tls-cert FILE           mutual TLS: this client's certificate (PEM) ...\n"
+    "  --tls-key FILE            ... and its key (PEM)\n"
+    "  --token-file FILE         send the bearer token in FILE (its first line) with each call\n";
 
-/// `flags` plus --server and --timeout.
+/// `flags` plus --server, --timeout and the TLS and token flags.
 [[nodiscard]] std::set<std::string> WithServerFlags(std::set<std::string> flags);
 
 /// A client for --server with the --timeout deadline (`default_timeout_s` when not given).

@@ -3,21 +3,72 @@
 #include <grpcpp/grpcpp.h>
 
 #include <cmath>
+#include <fstream>
+#include <sstream>
 
 #include "client_internal.h"
 
 namespace objmap {
 namespace {
 
+bool ReadPem(const std::string& path, const char* what, std::string* pem, std::string* why) {
+  std::ifstream file(path, std::ios::binary);
+  std::ostringstream text;
+  if (file) text << file.rdbuf();
+  *pem = text.str();
+  if (!file || pem->find("-----BEGIN") == std::string::npos) {
+    *why = path + ": cannot read the " + std::string(what) + " (a PEM file)";
+    return false;
+  }
+  return true;
+}
+
+// Plain, or TLS verified against the options' CA (with the client's certificate for mutual TLS).
+bool MakeCredentials(const MapClientOptions& options,
+                     std::shared_ptr<grpc::ChannelCredentials>* credentials, std::string* why) {
+  if (options.tls_ca_path.empty()) {
+    *credentials = grpc::InsecureChannelCredentials();
+    return true;
+  }
+  grpc::SslCredentialsOptions tls;
+  if (!ReadPem(options.tls_ca_path, "CA certificate", &tls.pem_root_certs, why)) return false;
+  if (!options.tls_cert_path.empty() &&
+      (!ReadPem(options.tls_cert_path, "client certificate", &tls.pem_cert_chain, why) ||
+       !ReadPem(options.tls_key_path, "client key", &tls.pem_private_key, why))) {
+    return false;
+  }
+  *credentials = grpc::SslCredentials(tls);
+  return true;
+}
+
 std::shared_ptr<grpc::Channel> MakeChannel(const std::string& address,
-                                           const MapClientOptions& options) {
+                                           const MapClientOptions& options,
+                                           std::shared_ptr<grpc::ChannelCredentials> credentials) {
   grpc::ChannelArguments arguments;
   arguments.SetMaxReceiveMessageSize(options.max_message_bytes);
   arguments.SetMaxSendMessageSize(options.max_message_bytes);
-  return grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), arguments);
+  return grpc::CreateCustomChannel(address, std::move(credentials), arguments);
 }
 
 }  // namespace
+
+bool ReadTokenFile(const std::string& path, std::string* token, std::string* why) {
+  std::ifstream file(path);
+  if (!file) {
+    *why = path + ": cannot read the token file";
+    return false;
+  }
+  std::string line;
+  while (std::getline(file, line)) {
+    const std::size_t first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    const std::size_t last = line.find_last_not_of(" \t\r");
+    *token = line.substr(first, last - first + 1);
+    return true;
+  }
+  *why = path + ": no token in the file";
+  return false;
+}
 
 bool MapClientOptions::IsValid(std::string* why) const {
   if (!std::isfinite(deadline_s) || deadline_s < 0.0) {
@@ -32,6 +83,18 @@ bool MapClientOptions::IsValid(std::string* why) const {
     *why = "max_message_bytes must be at least 1024";
     return false;
   }
+  if (tls_cert_path.empty() != tls_key_path.empty()) {
+    *why = "tls_cert_path and tls_key_path go together (mutual TLS)";
+    return false;
+  }
+  if (!tls_cert_path.empty() && tls_ca_path.empty()) {
+    *why = "a client certificate (tls_cert_path) needs TLS (tls_ca_path)";
+    return false;
+  }
+  if (token.find_first_of("\r\n") != std::string::npos) {
+    *why = "token must be one line";
+    return false;
+  }
   return encoding.IsValid(why);
 }
 
@@ -42,7 +105,12 @@ MapClient::MapClient(const std::string& address, const MapClientOptions& options
     options_error_ = "MapClientOptions: " + why;
     options_.max_message_bytes = MapClientOptions().max_message_bytes;
   }
-  channel_ = MakeChannel(address_, options_);
+  std::shared_ptr<grpc::ChannelCredentials> credentials;
+  if (!MakeCredentials(options_, &credentials, &why)) {
+    if (options_error_.empty()) options_error_ = "MapClientOptions: " + why;
+    credentials = grpc::InsecureChannelCredentials();
+  }
+  channel_ = MakeChannel(address_, options_, std::move(credentials));
   stub_ = v1::MapService::NewStub(channel_);
 }
 
@@ -62,6 +130,7 @@ grpc::Status MapClient::Call(UnaryMethod<Request, Response> method, const Reques
   if (!options_error_.empty()) return OptionsStatus();
   grpc::ClientContext context;
   internal::SetDeadline(options_.deadline_s, &context);
+  internal::AddToken(options_.token, &context);
   return (stub_.get()->*method)(&context, request, response);
 }
 
@@ -134,6 +203,7 @@ std::unique_ptr<IngestWriter> MapClient::StartIngest() {
 
 std::unique_ptr<grpc::ClientReader<v1::MapChange>> MapClient::WatchMap(
     const v1::WatchMapRequest& request, grpc::ClientContext* context) {
+  internal::AddToken(options_.token, context);
   return stub_->WatchMap(context, request);
 }
 

@@ -4,8 +4,14 @@
 #include <grpcpp/client_context.h>
 
 #include <chrono>
+#include <string>
 
 namespace objmap::internal {
+
+/// Adds the bearer token (when there is one) to a call's metadata.
+inline void AddToken(const std::string& token, grpc::ClientContext* context) {
+  if (!token.empty()) context->AddMetadata("authorization", "Bearer " + token);
+}
 
 /// Sets a deadline `deadline_s` seconds from now; 0 or less leaves the call without one.
 inline void SetDeadline(double deadline_s, grpc::ClientContext* context) {

@@ -14,6 +14,7 @@ IngestWriter::IngestWriter(v1::MapService::Stub* stub, const MapClientOptions& o
     return;
   }
   internal::SetDeadline(options_.ingest_deadline_s, &context_);
+  internal::AddToken(options_.token, &context_);
   writer_ = stub->IngestKeyframes(&context_, &summary_);
 }
 

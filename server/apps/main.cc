@@ -94,8 +94,23 @@ int Serve(const ServerOptions& options, const ObjmapConfig& config) {
   std::unique_ptr<MapServer> map_server = OpenMapServer(options, config);
   if (!map_server) return 1;
   grpc_service::MapServiceImpl service(*map_server);
-  int port = 0;
   std::string why;
+  if (!options.grpc.tokens_path.empty()) {
+    grpc_service::AccessTokens tokens;
+    std::string warning;
+    if (!grpc_service::AccessTokens::Load(options.grpc.tokens_path, &tokens, &why, &warning)) {
+      std::cerr << "objmap_server: " << why << "\n";
+      return 1;
+    }
+    if (!warning.empty()) std::cerr << "objmap_server: warning: " << warning << "\n";
+    service.RequireTokens(std::move(tokens));
+  }
+  if (options.grpc.ExposedWithoutProtection()) {
+    std::cerr << "objmap_server: warning: serving " << options.grpc.listen_address
+              << " without TLS and tokens (--insecure): anyone who reaches it can read the map, "
+                 "move every pose and add objects\n";
+  }
+  int port = 0;
   std::unique_ptr<grpc::Server> server =
       grpc_service::StartGrpcServer(options.grpc, &service, &port, &why);
   if (!server) {

@@ -36,6 +36,14 @@ bool SetValue(const std::string& flag, const std::string& value, ServerOptions* 
     options->grpc.listen_address = value;
   } else if (flag == "--max-message-mb") {
     return ParseInt(flag, value, &options->grpc.max_receive_message_mb, why);
+  } else if (flag == "--tls-cert") {
+    options->grpc.tls_cert_path = value;
+  } else if (flag == "--tls-key") {
+    options->grpc.tls_key_path = value;
+  } else if (flag == "--tls-client-ca") {
+    options->grpc.tls_client_ca_path = value;
+  } else if (flag == "--tokens") {
+    options->grpc.tokens_path = value;
   } else {
     *why = "unknown option " + flag;
     return false;
@@ -62,6 +70,8 @@ bool ParseServerOptions(int argc, const char* const* argv, ServerOptions* option
       options->no_detector = true;
     } else if (arg == "--print-config") {
       options->print_config = true;
+    } else if (arg == "--insecure") {
+      options->grpc.insecure = true;
     } else if (arg.rfind("--", 0) != 0) {
       *why = "unexpected argument '" + arg + "'";
       return false;
@@ -81,8 +91,10 @@ bool ParseServerOptions(int argc, const char* const* argv, ServerOptions* option
   // Checked here, before the database is opened and the detector loaded.
   std::string invalid;
   if (!options->grpc.IsValid(&invalid)) {
-    *why =
-        (invalid.rfind("listen address", 0) == 0 ? "--listen: " : "--max-message-mb: ") + invalid;
+    *why = (invalid.rfind("listen address", 0) == 0 ? "--listen: "
+            : invalid.rfind("max message", 0) == 0  ? "--max-message-mb: "
+                                                    : "") +
+           invalid;
     return false;
   }
   return true;
@@ -106,6 +118,14 @@ const char* ServerUsage() {
          "run)\n"
          "  --no-detector         run no detector: keyframes without detections add no objects\n"
          "  --max-message-mb N    largest request accepted, MiB (default 64)\n"
+         "  --tls-cert FILE       serve over TLS with this certificate chain (PEM) ...\n"
+         "  --tls-key FILE        ... and its private key (PEM)\n"
+         "  --tls-client-ca FILE  mutual TLS: clients need a certificate signed by this CA\n"
+         "  --tokens FILE         calls need 'authorization: Bearer TOKEN'; lines 'read TOKEN'\n"
+         "                        (queries) or 'write TOKEN' (also AddKeyframe, IngestKeyframes,\n"
+         "                        UpdatePoses)\n"
+         "  --insecure            serve an address other machines reach (0.0.0.0:50051) without\n"
+         "                        TLS and tokens; refused otherwise\n"
          "  --print-config        print the effective configuration as YAML and exit\n"
          "  --version             print the version and the build's options and exit\n"
          "Stops cleanly on SIGINT or SIGTERM: acknowledged keyframes are always durable.\n";

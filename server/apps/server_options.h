@@ -17,7 +17,8 @@ struct ServerOptions {
   bool print_config = false;  ///< --print-config: print the effective YAML and exit
   bool help = false;          ///< --help
   bool version = false;       ///< --version
-  grpc_service::GrpcServerOptions grpc;  ///< --listen, --max-message-mb
+  /// --listen, --max-message-mb, --tls-cert, --tls-key, --tls-client-ca, --tokens, --insecure
+  grpc_service::GrpcServerOptions grpc;
 };
 
 /// Parses argv (flags as "--flag value" or "--flag=value"). False with a reason naming the flag.

@@ -4,6 +4,7 @@
 #include <cstring>
 #include <sstream>
 
+#include "grpc_service/handler_guard.h"
 #include "types/coco_classes.h"
 
 namespace objmap::grpc_service {
@@ -82,6 +83,14 @@ bool PoseFromProto(const v1::Pose& pose, const std::string& field, Eigen::Isomet
       !CheckFinite(field, kQuaternion, q, 4, why)) {
     return false;
   }
+  for (int i = 0; i < 3; ++i) {
+    if (std::abs(t[i]) > kMaxTranslationM) {
+      *why = field + kTranslation[i] + " is " + FormatNumber(t[i]) + " m; at most " +
+             FormatNumber(kMaxTranslationM) +
+             " m from the map origin (float map coordinates keep centimetres only that far)";
+      return false;
+    }
+  }
   const Eigen::Quaterniond rotation(q[3], q[0], q[1], q[2]);
   const double norm = rotation.norm();
   if (std::abs(norm - 1.0) > kQuaternionNormTolerance) {
@@ -117,7 +126,7 @@ bool ClassIdFromName(const std::string& name, const std::string& field, int* cla
                      std::string* why) {
   *class_id = CocoClassId(name);
   if (*class_id < 0) {
-    *why = field + " '" + name + "' is not a COCO class";
+    *why = field + " '" + Shortened(name, kMaxQuotedBytes) + "' is not a COCO class";
     return false;
   }
   return true;

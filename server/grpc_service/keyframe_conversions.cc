@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <sstream>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -10,6 +11,15 @@
 
 namespace objmap::grpc_service {
 namespace {
+
+// "JPEG (2)", or "99" for a number outside the enum (proto3 keeps unknown enum values).
+std::string EncodingText(int encoding) {
+  const std::string name = v1::Image::Encoding_IsValid(encoding)
+                               ? v1::Image::Encoding_Name(static_cast<v1::Image::Encoding>(encoding))
+                               : std::string();
+  return name.empty() ? std::to_string(encoding)
+                      : name + " (" + std::to_string(encoding) + ")";
+}
 
 std::string SizeText(std::int64_t width, std::int64_t height) {
   return std::to_string(width) + "x" + std::to_string(height);
@@ -33,6 +43,21 @@ bool CheckRawSize(const v1::Image& image, const std::string& field, int bytes_pe
   return true;
 }
 
+// A JPEG ends with the EOI marker FF D9 (a few bytes of padding may follow). Inside the
+// entropy-coded data every FF byte is followed by 00, so FF D9 only marks an end: without it the
+// file was cut short, and the decoder would fill the missing rows with grey without an error.
+bool EndsWithJpegEndMarker(const std::string& data) {
+  constexpr std::size_t kTail = 64;
+  const std::size_t from = data.size() > kTail ? data.size() - kTail : 0;
+  for (std::size_t i = data.size(); i-- > from + 1;) {
+    if (static_cast<unsigned char>(data[i - 1]) == 0xFF &&
+        static_cast<unsigned char>(data[i]) == 0xD9) {
+      return true;
+    }
+  }
+  return false;
+}
+
 // Reads the size from the PNG/JPEG header and checks it before decoding, so that a bad or
 // oversized image costs nothing to refuse.
 bool CheckEncodedSize(const v1::Image& image, const std::string& field, const CameraIntrinsics& K,
@@ -45,6 +70,11 @@ bool CheckEncodedSize(const v1::Image& image, const std::string& field, const Ca
             : ReadJpegSize(image.data(), &width, &height))) {
     *why = field + ".data (" + std::to_string(image.data().size()) + " bytes) is not a " + format +
            " image";
+    return false;
+  }
+  if (!png && !EndsWithJpegEndMarker(image.data())) {
+    *why = field + ".data (" + std::to_string(image.data().size()) +
+           " bytes) is a truncated JPEG: no end-of-image marker";
     return false;
   }
   if ((image.width() != 0 || image.height() != 0) &&
@@ -108,13 +138,21 @@ std::uint32_t ReadLe(const std::string& bytes, std::size_t offset, int size) {
   return value;
 }
 
-float ValidDepth(float depth_m) { return std::isfinite(depth_m) && depth_m > 0.f ? depth_m : 0.f; }
+// Non-finite, negative and out-of-range depths are no measurement.
+float ValidDepth(double depth_m) {
+  return std::isfinite(depth_m) && depth_m > 0.0 && depth_m <= kMaxDepthM
+             ? static_cast<float>(depth_m)
+             : 0.f;
+}
 
 bool DepthScale(const v1::Image& image, double* scale, std::string* why) {
   *scale = image.depth_scale() == 0.0 ? kDefaultDepthScale : image.depth_scale();
-  if (!std::isfinite(*scale) || *scale <= 0.0) {
-    *why = "depth.depth_scale " + std::to_string(image.depth_scale()) +
-           " must be positive (0: millimetres)";
+  // A metre or more per unit is no depth camera; larger scales only overflow.
+  if (!(*scale > 0.0 && *scale <= kMaxDepthScale)) {
+    std::ostringstream text;
+    text << "depth.depth_scale " << image.depth_scale()
+         << " must lie in (0, 1] metres per unit (0: millimetres)";
+    *why = text.str();
     return false;
   }
   return true;
@@ -131,8 +169,7 @@ bool DecodeDepthPng(const v1::Image& image, double scale, DepthImage* depth, std
   for (int v = 0; v < units.rows; ++v) {
     const auto* row = units.ptr<std::uint16_t>(v);
     for (int u = 0; u < units.cols; ++u) {
-      depth->depth_m[static_cast<std::size_t>(v) * units.cols + u] =
-          static_cast<float>(row[u] * scale);
+      depth->depth_m[static_cast<std::size_t>(v) * units.cols + u] = ValidDepth(row[u] * scale);
     }
   }
   return true;
@@ -154,7 +191,7 @@ bool DecodeColorImage(const v1::Image& image, const CameraIntrinsics& K, ColorIm
     case v1::Image::JPEG:
       break;
     default:
-      *why = "color.encoding " + v1::Image::Encoding_Name(image.encoding()) +
+      *why = "color.encoding " + EncodingText(image.encoding()) +
              " is not a colour encoding (PNG, JPEG or RAW_RGB8)";
       return false;
   }
@@ -185,7 +222,7 @@ bool DecodeDepthImage(const v1::Image& image, const CameraIntrinsics& K, DepthIm
     case v1::Image::RAW_DEPTH_U16:
       if (!CheckRawSize(image, "depth", 2, K, why)) return false;
       for (std::size_t i = 0; i < pixels; ++i) {
-        depth->depth_m[i] = static_cast<float>(ReadLe(image.data(), 2 * i, 2) * scale);
+        depth->depth_m[i] = ValidDepth(ReadLe(image.data(), 2 * i, 2) * scale);
       }
       return true;
     case v1::Image::RAW_DEPTH_F32:
@@ -201,14 +238,54 @@ bool DecodeDepthImage(const v1::Image& image, const CameraIntrinsics& K, DepthIm
       if (!CheckEncodedSize(image, "depth", K, why)) return false;
       return DecodeDepthPng(image, scale, depth, why);
     default:
-      *why = "depth.encoding " + v1::Image::Encoding_Name(image.encoding()) +
+      *why = "depth.encoding " + EncodingText(image.encoding()) +
              " is not a depth encoding (PNG, RAW_DEPTH_U16 or RAW_DEPTH_F32)";
       return false;
   }
 }
 
-bool FrameFromRequest(const v1::AddKeyframeRequest& request, RgbdFrame* frame,
-                      std::optional<std::vector<Detection>>* detections, std::string* why) {
+bool WithinLimits(const v1::AddKeyframeRequest& request, const RequestLimits& limits,
+                  std::string* why) {
+  const auto too_long = [&](const std::string& text, const std::string& field) {
+    if (static_cast<std::int64_t>(text.size()) <= limits.max_string_bytes) return false;
+    *why = field + " is " + std::to_string(text.size()) + " bytes; the server takes at most " +
+           std::to_string(limits.max_string_bytes) + " (server.max_string_bytes)";
+    return true;
+  };
+  if (too_long(request.name(), "name")) return false;
+  if (request.detections_size() > limits.max_detections_per_keyframe) {
+    *why = "detections has " + std::to_string(request.detections_size()) +
+           " entries; the server takes at most " +
+           std::to_string(limits.max_detections_per_keyframe) +
+           " per keyframe (server.max_detections_per_keyframe)";
+    return false;
+  }
+  for (int i = 0; i < request.detections_size(); ++i) {
+    if (too_long(request.detections(i).class_name(),
+                 "detections[" + std::to_string(i) + "].class_name")) {
+      return false;
+    }
+  }
+  const std::int64_t pixels =
+      std::int64_t{request.intrinsics().width()} * request.intrinsics().height();
+  if (pixels > limits.max_image_pixels) {
+    *why = "intrinsics: " + SizeText(request.intrinsics().width(), request.intrinsics().height()) +
+           " is " + std::to_string(pixels) + " pixels; the server decodes at most " +
+           std::to_string(limits.max_image_pixels) + " (server.max_image_pixels)";
+    return false;
+  }
+  return true;
+}
+
+bool FrameFromRequest(const v1::AddKeyframeRequest& request, const RequestLimits& limits,
+                      RgbdFrame* frame, std::optional<std::vector<Detection>>* detections,
+                      grpc::StatusCode* code, std::string* why) {
+  // The limits first: they cost nothing to check and bound what the rest may cost.
+  if (!WithinLimits(request, limits, why)) {
+    *code = grpc::StatusCode::RESOURCE_EXHAUSTED;
+    return false;
+  }
+  *code = grpc::StatusCode::INVALID_ARGUMENT;
   if (!IntrinsicsFromProto(request.intrinsics(), &frame->intrinsics, why) ||
       !PoseFromProto(request.t_w_c(), "T_W_C", &frame->T_W_C, why)) {
     return false;

@@ -2,7 +2,11 @@
 // WatchMap; the queries are in map_service_queries.cc.
 #include "grpc_service/map_service.h"
 
+#include <google/protobuf/descriptor.h>
+#include <grpcpp/support/proto_buffer_reader.h>
+
 #include <algorithm>
+#include <stdexcept>
 
 #include "grpc_service/conversions.h"
 #include "grpc_service/handler_guard.h"
@@ -10,6 +14,44 @@
 
 namespace objmap::grpc_service {
 namespace {
+
+const google::protobuf::ServiceDescriptor& MapServiceDescriptor() {
+  const google::protobuf::ServiceDescriptor* service =
+      google::protobuf::DescriptorPool::generated_pool()->FindServiceByName(
+          v1::MapService::service_full_name());
+  if (service == nullptr) throw std::logic_error("objmap.proto's MapService is not linked in");
+  return *service;
+}
+
+// "name, detections.class_name": the text fields of a message and of the messages in it, which
+// protobuf refuses to decode when they are not UTF-8.
+void AppendStringFields(const google::protobuf::Descriptor& message, const std::string& prefix,
+                        int depth, std::string* names) {
+  for (int i = 0; i < message.field_count(); ++i) {
+    const google::protobuf::FieldDescriptor& field = *message.field(i);
+    if (field.type() == google::protobuf::FieldDescriptor::TYPE_STRING) {
+      *names += (names->empty() ? "" : ", ") + prefix + field.name();
+    } else if (field.message_type() != nullptr && depth < 2) {
+      AppendStringFields(*field.message_type(), prefix + field.name() + ".", depth + 1, names);
+    }
+  }
+}
+
+// Decodes a request received as bytes. A message protobuf refuses (not a message of this type,
+// or a text field that is not UTF-8, e.g. a Latin-1 file name) is the client's error.
+template <typename Message>
+grpc::Status DecodeRequest(const grpc::ByteBuffer& bytes, Message* message) {
+  grpc::ByteBuffer buffer(bytes);  // shares the slices; the reader needs a mutable buffer
+  grpc::ProtoBufferReader reader(&buffer);
+  if (reader.status().ok() && message->ParseFromZeroCopyStream(&reader)) return grpc::Status::OK;
+  const google::protobuf::Descriptor& type = *Message::descriptor();
+  std::string text_fields;
+  AppendStringFields(type, "", 0, &text_fields);
+  return Invalid("cannot decode the " + type.name() + " (" + std::to_string(bytes.Length()) +
+                 " bytes): not a " + type.full_name() + " message" +
+                 (text_fields.empty() ? std::string()
+                                      : ", or a text field (" + text_fields + ") not UTF-8"));
+}
 
 void OutcomeToProto(const AddKeyframeOutcome& outcome, v1::AddKeyframeResponse* response) {
   response->set_keyframe_id(outcome.keyframe_id);
@@ -37,20 +79,127 @@ bool PosesFromProto(const v1::UpdatePosesRequest& request,
 }
 
 // "keyframe 12 (frame-000120): " for the index-th request of a stream.
-std::string StreamPrefix(int index, const v1::AddKeyframeRequest& request) {
+std::string StreamPrefix(int index, const v1::AddKeyframeRequest* request) {
   std::string prefix = "keyframe " + std::to_string(index);
-  if (!request.name().empty()) prefix += " (" + request.name() + ")";
+  if (request != nullptr && !request->name().empty()) {
+    prefix += " (" + Shortened(request->name(), kMaxQuotedBytes) + ")";
+  }
   return prefix + ": ";
 }
 
 }  // namespace
+
+MapServiceImpl::MapServiceImpl(MapServer& server) : server_(server) { RegisterMethods(); }
+
+void MapServiceImpl::RequireTokens(AccessTokens tokens) { tokens_ = std::move(tokens); }
+
+grpc::Status MapServiceImpl::Authorize(const grpc::ServerContext& context, const char* method,
+                                       bool writes) const {
+  if (!tokens_) return grpc::Status::OK;
+  const auto& metadata = context.client_metadata();
+  const auto header = metadata.find("authorization");
+  const std::string_view token =
+      header == metadata.end()
+          ? std::string_view()
+          : BearerToken(std::string_view(header->second.data(), header->second.size()));
+  const Access access = token.empty() ? Access::kNone : tokens_->Find(token);
+  if (access == Access::kNone) {
+    return grpc::Status(grpc::StatusCode::UNAUTHENTICATED,
+                        token.empty() ? "this server needs a bearer token (metadata "
+                                        "'authorization: Bearer TOKEN')"
+                                      : "unknown bearer token");
+  }
+  if (writes && access != Access::kReadWrite) {
+    return grpc::Status(grpc::StatusCode::PERMISSION_DENIED,
+                        std::string(method) +
+                            " changes the map and needs a read-write token; this one is read-only");
+  }
+  return grpc::Status::OK;
+}
+
+const char* MapServiceImpl::MethodPath(const char* method) {
+  if (MapServiceDescriptor().FindMethodByName(method) == nullptr) {
+    throw std::logic_error(std::string("objmap.proto's MapService has no method ") + method);
+  }
+  method_paths_.push_back("/" + std::string(v1::MapService::service_full_name()) + "/" + method);
+  return method_paths_.back().c_str();
+}
+
+template <typename Request, typename Response>
+void MapServiceImpl::AddUnary(const char* method, bool writes,
+                              grpc::Status (MapServiceImpl::*handler)(grpc::ServerContext*,
+                                                                      const Request*, Response*)) {
+  using Handler = grpc::internal::RpcMethodHandler<MapServiceImpl, grpc::ByteBuffer, Response,
+                                                   grpc::ByteBuffer, grpc::protobuf::MessageLite>;
+  AddMethod(new grpc::internal::RpcServiceMethod(
+      MethodPath(method), grpc::internal::RpcMethod::NORMAL_RPC,
+      new Handler(
+          [handler, method, writes](MapServiceImpl* service, grpc::ServerContext* context,
+                                    const grpc::ByteBuffer* bytes, Response* response) {
+            const grpc::Status allowed = service->Authorize(*context, method, writes);
+            if (!allowed.ok()) return allowed;
+            Request request;
+            const grpc::Status decoded = Bounded(DecodeRequest(*bytes, &request));
+            if (!decoded.ok()) return decoded;
+            return (service->*handler)(context, &request, response);
+          },
+          this)));
+}
+
+void MapServiceImpl::RegisterMethods() {
+  // In objmap.proto's order; the count is checked against the proto below.
+  AddUnary("AddKeyframe", true, &MapServiceImpl::AddKeyframe);
+  AddMethod(new grpc::internal::RpcServiceMethod(
+      MethodPath("IngestKeyframes"), grpc::internal::RpcMethod::CLIENT_STREAMING,
+      new grpc::internal::ClientStreamingHandler<MapServiceImpl, grpc::ByteBuffer,
+                                                 v1::IngestSummary>(
+          [](MapServiceImpl* service, grpc::ServerContext* context,
+             grpc::ServerReader<grpc::ByteBuffer>* reader, v1::IngestSummary* summary) {
+            const grpc::Status allowed = service->Authorize(*context, "IngestKeyframes", true);
+            if (!allowed.ok()) return allowed;
+            return service->IngestKeyframes(context, reader, summary);
+          },
+          this)));
+  AddUnary("UpdatePoses", true, &MapServiceImpl::UpdatePoses);
+  AddUnary("ListKeyframes", false, &MapServiceImpl::ListKeyframes);
+  AddUnary("QueryObjects", false, &MapServiceImpl::QueryObjects);
+  AddUnary("GetObject", false, &MapServiceImpl::GetObject);
+  AddUnary("Inventory", false, &MapServiceImpl::Inventory);
+  AddUnary("QueryOccupancy", false, &MapServiceImpl::QueryOccupancy);
+  AddUnary("IsFree", false, &MapServiceImpl::IsFree);
+  AddUnary("RayCast", false, &MapServiceImpl::RayCast);
+  AddUnary("GetOctomap", false, &MapServiceImpl::GetOctomap);
+  AddUnary("Status", false, &MapServiceImpl::Status);
+  AddMethod(new grpc::internal::RpcServiceMethod(
+      MethodPath("WatchMap"), grpc::internal::RpcMethod::SERVER_STREAMING,
+      new grpc::internal::ServerStreamingHandler<MapServiceImpl, grpc::ByteBuffer, v1::MapChange>(
+          [](MapServiceImpl* service, grpc::ServerContext* context, const grpc::ByteBuffer* bytes,
+             grpc::ServerWriter<v1::MapChange>* writer) {
+            const grpc::Status allowed = service->Authorize(*context, "WatchMap", false);
+            if (!allowed.ok()) return allowed;
+            v1::WatchMapRequest request;
+            const grpc::Status decoded = Bounded(DecodeRequest(*bytes, &request));
+            if (!decoded.ok()) return decoded;
+            return service->WatchMap(context, &request, writer);
+          },
+          this)));
+  if (static_cast<int>(method_paths_.size()) != MapServiceDescriptor().method_count()) {
+    throw std::logic_error("objmap.proto's MapService has " +
+                           std::to_string(MapServiceDescriptor().method_count()) +
+                           " methods but the service registers " +
+                           std::to_string(method_paths_.size()));
+  }
+}
 
 grpc::Status MapServiceImpl::AddOne(const v1::AddKeyframeRequest& request,
                                     AddKeyframeOutcome* outcome) {
   RgbdFrame frame;
   std::optional<std::vector<Detection>> detections;
   std::string why;
-  if (!FrameFromRequest(request, &frame, &detections, &why)) return Invalid(why);
+  grpc::StatusCode code = grpc::StatusCode::INVALID_ARGUMENT;
+  if (!FrameFromRequest(request, server_.limits(), &frame, &detections, &code, &why)) {
+    return {code, why};
+  }
   return ToGrpcStatus(server_.AddKeyframe(std::move(frame), std::move(detections), outcome));
 }
 
@@ -66,19 +215,25 @@ grpc::Status MapServiceImpl::AddKeyframe(grpc::ServerContext* /*context*/,
 }
 
 grpc::Status MapServiceImpl::IngestKeyframes(grpc::ServerContext* /*context*/,
-                                             grpc::ServerReader<v1::AddKeyframeRequest>* reader,
+                                             grpc::ServerReaderInterface<grpc::ByteBuffer>* reader,
                                              v1::IngestSummary* summary) {
   return Guarded("IngestKeyframes", [&] {
-    v1::AddKeyframeRequest request;
+    grpc::ByteBuffer bytes;
     int index = 0;
     int objects_created = 0;
     std::uint64_t map_version = server_.Snapshot()->version;
-    while (reader->Read(&request)) {
+    while (reader->Read(&bytes)) {
+      v1::AddKeyframeRequest request;
+      const grpc::Status decoded = DecodeRequest(bytes, &request);
+      if (!decoded.ok()) {
+        return grpc::Status(decoded.error_code(),
+                            StreamPrefix(index, nullptr) + decoded.error_message());
+      }
       AddKeyframeOutcome outcome;
       const grpc::Status status = AddOne(request, &outcome);
       if (!status.ok()) {
         return grpc::Status(status.error_code(),
-                            StreamPrefix(index, request) + status.error_message());
+                            StreamPrefix(index, &request) + status.error_message());
       }
       if (index == 0) summary->set_first_keyframe_id(outcome.keyframe_id);
       summary->set_last_keyframe_id(outcome.keyframe_id);
@@ -97,6 +252,13 @@ grpc::Status MapServiceImpl::UpdatePoses(grpc::ServerContext* /*context*/,
                                          const v1::UpdatePosesRequest* request,
                                          v1::UpdatePosesResponse* response) {
   return Guarded("UpdatePoses", [&] {
+    if (request->poses_size() > server_.limits().max_poses_per_update) {
+      return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                          "poses has " + std::to_string(request->poses_size()) +
+                              " entries; the server takes at most " +
+                              std::to_string(server_.limits().max_poses_per_update) +
+                              " (server.max_poses_per_update)");
+    }
     std::map<KeyframeId, Eigen::Isometry3d> poses;
     std::string why;
     if (!PosesFromProto(*request, &poses, &why)) return Invalid(why);

@@ -110,6 +110,25 @@ TEST(ColorDecoding, RefusesGarbageAndDepthEncodings) {
   EXPECT_NE(why.find("not a colour encoding"), std::string::npos) << why;
 }
 
+// A JPEG cut short decodes without an error (the decoder greys the missing rows), so the end
+// marker is checked; a whole JPEG with padding after its end still decodes.
+TEST(ColorDecoding, ATruncatedJpegIsRefused) {
+  const CameraIntrinsics K = SmallIntrinsics(64, 48);
+  const std::string jpeg = Encode(GradientBgr(64, 48), ".jpg");
+  ColorImage color;
+  std::string why;
+  ASSERT_TRUE(DecodeColorImage(MakeImage(v1::Image::JPEG, jpeg), K, &color, &why)) << why;
+  ASSERT_TRUE(DecodeColorImage(MakeImage(v1::Image::JPEG, jpeg + std::string(8, '\0')), K, &color,
+                               &why))
+      << why;
+  for (const std::size_t cut : {std::size_t{2}, jpeg.size() / 3}) {
+    EXPECT_FALSE(DecodeColorImage(MakeImage(v1::Image::JPEG, jpeg.substr(0, jpeg.size() - cut)), K,
+                                  &color, &why))
+        << "cut " << cut;
+    EXPECT_NE(why.find("truncated JPEG"), std::string::npos) << why;
+  }
+}
+
 TEST(DepthDecoding, SixteenBitPngTimesDepthScale) {
   const CameraIntrinsics K = SmallIntrinsics();
   v1::Image image = MakeImage(v1::Image::PNG, Encode(DepthUnits(8, 6), ".png"));
@@ -172,7 +191,11 @@ TEST(DepthDecoding, HugeImagesAreRefusedBeforeDecoding) {
 
 class FrameFromRequestTest : public ::testing::Test {
  protected:
-  FrameFromRequestTest() {
+  FrameFromRequestTest() { Reset(); }
+
+  // A valid request of an 8x6 frame without detections.
+  void Reset() {
+    request_.Clear();
     const CameraIntrinsics K = SmallIntrinsics();
     auto* intrinsics = request_.mutable_intrinsics();
     intrinsics->set_width(K.width);
@@ -197,14 +220,20 @@ class FrameFromRequestTest : public ::testing::Test {
     return detection;
   }
 
+  bool Convert() {
+    return FrameFromRequest(request_, limits_, &frame_, &detections_, &code_, &why_);
+  }
+
   v1::AddKeyframeRequest request_;
+  RequestLimits limits_;
   RgbdFrame frame_;
   std::optional<std::vector<Detection>> detections_;
+  grpc::StatusCode code_ = grpc::StatusCode::OK;
   std::string why_;
 };
 
 TEST_F(FrameFromRequestTest, DetectionsOnlyWhenGiven) {
-  ASSERT_TRUE(FrameFromRequest(request_, &frame_, &detections_, &why_)) << why_;
+  ASSERT_TRUE(Convert()) << why_;
   EXPECT_FALSE(detections_.has_value());  // the server's detector runs
   EXPECT_EQ(frame_.name, "frame-1");
   EXPECT_DOUBLE_EQ(frame_.stamp_s, 12.5);
@@ -212,13 +241,13 @@ TEST_F(FrameFromRequestTest, DetectionsOnlyWhenGiven) {
   EXPECT_TRUE(ValidateFrame(frame_, &why_)) << why_;
 
   request_.set_detections_given(true);
-  ASSERT_TRUE(FrameFromRequest(request_, &frame_, &detections_, &why_)) << why_;
+  ASSERT_TRUE(Convert()) << why_;
   ASSERT_TRUE(detections_.has_value());
   EXPECT_TRUE(detections_->empty());  // given, and none: no objects, no detector
 
   AddCup();
   request_.set_detections_given(false);
-  EXPECT_FALSE(FrameFromRequest(request_, &frame_, &detections_, &why_));
+  EXPECT_FALSE(Convert());
   EXPECT_NE(why_.find("detections_given is false"), std::string::npos) << why_;
 }
 
@@ -226,21 +255,103 @@ TEST_F(FrameFromRequestTest, ErrorsNameTheField) {
   request_.set_detections_given(true);
   AddCup();
   AddCup()->set_class_name("unicorn");
-  EXPECT_FALSE(FrameFromRequest(request_, &frame_, &detections_, &why_));
+  EXPECT_FALSE(Convert());
   EXPECT_EQ(why_, "detections[1].class_name 'unicorn' is not a COCO class");
 
   request_.mutable_t_w_c()->set_qw(0.0);
-  EXPECT_FALSE(FrameFromRequest(request_, &frame_, &detections_, &why_));
+  EXPECT_FALSE(Convert());
   EXPECT_EQ(why_.rfind("T_W_C.q", 0), 0u) << why_;
 
   request_.clear_intrinsics();
-  EXPECT_FALSE(FrameFromRequest(request_, &frame_, &detections_, &why_));
+  EXPECT_FALSE(Convert());
   EXPECT_EQ(why_.rfind("intrinsics", 0), 0u) << why_;
+}
+
+// Limits are RESOURCE_EXHAUSTED, name the field and the limit, and never quote the input.
+TEST_F(FrameFromRequestTest, LimitsNameTheFieldAndTheLimit) {
+  ASSERT_TRUE(Convert()) << why_;
+  request_.set_detections_given(true);
+  limits_.max_detections_per_keyframe = 2;
+  for (int i = 0; i < 3; ++i) AddCup();
+  EXPECT_FALSE(Convert());
+  EXPECT_EQ(code_, grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_EQ(why_,
+            "detections has 3 entries; the server takes at most 2 per keyframe "
+            "(server.max_detections_per_keyframe)");
+  request_.mutable_detections()->RemoveLast();
+  ASSERT_TRUE(Convert()) << why_;
+
+  request_.mutable_detections(1)->set_class_name(std::string(20000, 'x'));
+  EXPECT_FALSE(Convert());
+  EXPECT_EQ(code_, grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_EQ(why_,
+            "detections[1].class_name is 20000 bytes; the server takes at most 1024 "
+            "(server.max_string_bytes)");
+  request_.mutable_detections(1)->set_class_name(std::string(500, 'x'));
+  EXPECT_FALSE(Convert());
+  EXPECT_EQ(code_, grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_LT(why_.size(), 200u) << "the unknown class is quoted shortened";
+  request_.mutable_detections(1)->set_class_name("cup");
+
+  request_.set_name(std::string(2000, 'n'));
+  EXPECT_FALSE(Convert());
+  EXPECT_EQ(code_, grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_EQ(why_.rfind("name is 2000 bytes", 0), 0u) << why_;
+  request_.set_name("frame-1");
+
+  limits_.max_image_pixels = 47;  // the frames are 8x6
+  EXPECT_FALSE(Convert());
+  EXPECT_EQ(code_, grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_EQ(why_,
+            "intrinsics: 8x6 is 48 pixels; the server decodes at most 47 (server.max_image_pixels)");
+}
+
+// Finite is not enough: magnitudes that overflow pixel, voxel or float arithmetic are refused
+// with the field and the bound, and depths out of any sensor's range are no measurement.
+TEST_F(FrameFromRequestTest, MagnitudesBeyondAnyCameraAreRefused) {
+  const auto refused = [&](const char* what, const std::string& field) {
+    EXPECT_FALSE(Convert()) << what;
+    EXPECT_EQ(code_, grpc::StatusCode::INVALID_ARGUMENT) << what;
+    EXPECT_NE(why_.find(field), std::string::npos) << what << ": " << why_;
+    Reset();
+  };
+  request_.mutable_intrinsics()->set_fy(3.4e38);
+  refused("fy 3.4e38", "fy 3.4e+38");
+  request_.mutable_intrinsics()->set_fx(1e300);
+  refused("fx 1e300", "fx 1e+300");
+  request_.mutable_intrinsics()->set_fx(0.5);
+  refused("fx 0.5", "must lie in [1, 100000]");
+  request_.mutable_intrinsics()->set_cx(1e300);
+  refused("cx 1e300", "principal point");
+  request_.mutable_t_w_c()->mutable_translation()->set_y(1e300);
+  refused("translation 1e300", "T_W_C.translation.y is 1e+300 m");
+  request_.mutable_t_w_c()->mutable_translation()->set_x(-2e5);
+  refused("translation 200 km", "T_W_C.translation.x is -200000 m");
+  request_.mutable_depth()->set_depth_scale(1e300);
+  refused("depth_scale 1e300", "depth.depth_scale 1e+300 must lie in (0, 1]");
+  request_.mutable_color()->set_encoding(static_cast<v1::Image::Encoding>(99));
+  refused("encoding 99", "color.encoding 99 is not a colour encoding");
+  request_.mutable_color()->set_encoding(v1::Image::RAW_DEPTH_U16);
+  refused("a depth encoding for colour", "color.encoding RAW_DEPTH_U16 (");
+
+  // Depth of 1e30 m, of 2 km and of 1.5 m in a float image: the first two are no depth.
+  std::string bytes;
+  for (const float depth_m : {1e30f, 2000.f, 1.5f}) {
+    char raw[4];
+    std::memcpy(raw, &depth_m, 4);
+    bytes.append(raw, 4);
+  }
+  bytes.resize(8 * 6 * 4, '\0');
+  *request_.mutable_depth() = MakeImage(v1::Image::RAW_DEPTH_F32, bytes, 8, 6);
+  ASSERT_TRUE(Convert()) << why_;
+  EXPECT_EQ(frame_.depth.depth_m[0], 0.f);
+  EXPECT_EQ(frame_.depth.depth_m[1], 0.f);
+  EXPECT_EQ(frame_.depth.depth_m[2], 1.5f);
 }
 
 TEST_F(FrameFromRequestTest, DepthSizeMustMatchTheIntrinsics) {
   *request_.mutable_depth() = MakeImage(v1::Image::PNG, Encode(DepthUnits(4, 3), ".png"));
-  EXPECT_FALSE(FrameFromRequest(request_, &frame_, &detections_, &why_));
+  EXPECT_FALSE(Convert());
   EXPECT_EQ(why_, "depth is 4x3 but the intrinsics say 8x6");
 }
 

@@ -3,14 +3,17 @@
 // Keyframes are encoded by the client library, so these also check the wire format both agree on.
 #include "grpc_service/map_service.h"
 
+#include <grpcpp/generic/generic_stub.h>
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <cstdio>
+#include <future>
 #include <thread>
 
 #include "grpc_service/grpc_server.h"
+#include "objmap/client.h"
 #include "objmap/keyframe_request.h"
 #include "test_scenes.h"
 #include "types/coco_classes.h"
@@ -39,13 +42,14 @@ class MapServiceTest : public ::testing::Test {
     RemoveDatabase();
   }
 
-  void Start(int max_message_mb) {
+  void Start(int max_message_mb, GrpcServerOptions options = GrpcServerOptions(),
+             std::optional<AccessTokens> tokens = std::nullopt) {
     std::string why;
     const MapServerConfig server_config;
     map_server_ = MapServer::Open(server_config, db_path_, nullptr, &why);
     ASSERT_TRUE(map_server_) << why;
     service_ = std::make_unique<MapServiceImpl>(*map_server_);
-    GrpcServerOptions options;
+    if (tokens) service_->RequireTokens(*tokens);
     options.listen_address = "127.0.0.1:0";
     options.max_receive_message_mb = max_message_mb;
     server_ = StartGrpcServer(options, service_.get(), &port_, &why);
@@ -65,7 +69,9 @@ class MapServiceTest : public ::testing::Test {
     map_server_.reset();
   }
   void RemoveDatabase() const {
-    for (const char* suffix : {"", "-wal", "-shm"}) std::remove((db_path_ + suffix).c_str());
+    for (const char* suffix : {"", "-wal", "-shm", ".lock"}) {
+      std::remove((db_path_ + suffix).c_str());
+    }
   }
 
   // A table with a cup, seen from viewpoint `view`, with the cup's detection; with
@@ -296,6 +302,253 @@ TEST_F(MapServiceTest, WatchMapEndsUnavailableWhenTheServerShutsDown) {
   const grpc::Status status = reader->Finish();
   EXPECT_EQ(status.error_code(), grpc::StatusCode::UNAVAILABLE) << status.error_message();
   EXPECT_LT(std::chrono::steady_clock::now() - start, 2 * MapServiceImpl::kWatchPoll);
+}
+
+// A stream message that does not decode (a Latin-1 name is not UTF-8) ends the stream with
+// INVALID_ARGUMENT; gRPC's own decoding would end it OK and drop every later keyframe silently.
+TEST_F(MapServiceTest, AStreamMessageThatDoesNotDecodeEndsTheStreamWithItsIndex) {
+  grpc::ClientContext context;
+  v1::IngestSummary summary;
+  auto writer = stub_->IngestKeyframes(&context, &summary);
+  ASSERT_TRUE(writer->Write(Keyframe(0)));
+  v1::AddKeyframeRequest latin1 = Keyframe(1);
+  latin1.set_name("caf\xe9-1");  // Latin-1: the byte 0xe9 alone is not UTF-8
+  writer->Write(latin1);
+  for (int view = 2; view < 4; ++view) writer->Write(Keyframe(view));
+  writer->WritesDone();
+  const grpc::Status status = writer->Finish();
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
+  EXPECT_EQ(status.error_message().rfind("keyframe 1: cannot decode the AddKeyframeRequest", 0),
+            0u)
+      << status.error_message();
+  EXPECT_NE(status.error_message().find("name"), std::string::npos) << status.error_message();
+  EXPECT_EQ(map_server_->Status().keyframes, 1u);
+}
+
+// Bytes that are no request of the method's type get INVALID_ARGUMENT naming the type (gRPC's
+// own decoding answers INTERNAL with an empty message), on every kind of method, and the server
+// keeps serving.
+TEST_F(MapServiceTest, UndecodableRequestsAreInvalidArgumentsNamingTheType) {
+  grpc::GenericStub generic(grpc::CreateChannel(AddressWithPort("127.0.0.1:0", port_),
+                                                grpc::InsecureChannelCredentials()));
+  const std::string garbage = "\xff\xff\xff\xff garbage";
+  const grpc::Slice slice(garbage);
+  for (const char* method : {"AddKeyframe", "Inventory", "IsFree", "UpdatePoses"}) {
+    grpc::ClientContext context;
+    grpc::ByteBuffer request(&slice, 1);
+    grpc::ByteBuffer response;
+    std::promise<grpc::Status> done;
+    generic.UnaryCall(&context, std::string("/objmap.v1.MapService/") + method,
+                      grpc::StubOptions(), &request, &response,
+                      [&done](grpc::Status status) { done.set_value(status); });
+    const grpc::Status status = done.get_future().get();
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << method;
+    EXPECT_NE(status.error_message().find("cannot decode the "), std::string::npos)
+        << method << ": " << status.error_message();
+    EXPECT_LT(status.error_message().size(), 512u) << method;
+  }
+  // A detection's class name in Latin-1 over the typed stub: decoded by nobody, named.
+  v1::AddKeyframeRequest latin1 = Keyframe(0);
+  latin1.mutable_detections(0)->set_class_name("tasse \xe0 caf\xe9");
+  v1::AddKeyframeResponse added;
+  grpc::Status status = Add(latin1, &added);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("detections.class_name"), std::string::npos)
+      << status.error_message();
+  status = Add(Keyframe(0), &added);
+  EXPECT_TRUE(status.ok()) << status.error_message();
+}
+
+// A 20,000-character class name is refused by the limit with a short message; before, the
+// message quoted it whole and the client saw RESOURCE_EXHAUSTED from its own metadata limit.
+TEST_F(MapServiceTest, LongInputIsNeverEchoedWhole) {
+  v1::AddKeyframeRequest request = Keyframe(0);
+  request.mutable_detections(0)->set_class_name(std::string(20000, 'x'));
+  v1::AddKeyframeResponse added;
+  grpc::Status status = Add(request, &added);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_NE(status.error_message().find("server.max_string_bytes"), std::string::npos)
+      << status.error_message().substr(0, 200);
+  EXPECT_LT(status.error_message().size(), 512u);
+
+  // Within the limit, an unknown class is quoted shortened; a long name in a stream too.
+  request.mutable_detections(0)->set_class_name(std::string(1000, 'y'));
+  status = Add(request, &added);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_LT(status.error_message().size(), 200u) << status.error_message();
+  request.set_name(std::string(1000, 'n'));
+  grpc::ClientContext context;
+  v1::IngestSummary summary;
+  auto writer = stub_->IngestKeyframes(&context, &summary);
+  writer->Write(request);
+  writer->WritesDone();
+  status = writer->Finish();
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_LT(status.error_message().size(), 300u) << status.error_message();
+}
+
+// grpc_health_probe and grpcurl work out of the box: the standard health service answers
+// SERVING, and server reflection lists MapService. Spoken in raw protobuf bytes, as those tools
+// would (the health and reflection messages are not part of objmap.proto).
+TEST_F(MapServiceTest, HealthAndReflectionServicesAnswer) {
+  const auto channel = grpc::CreateChannel(AddressWithPort("127.0.0.1:0", port_),
+                                           grpc::InsecureChannelCredentials());
+  grpc::GenericStub generic(channel);
+  {
+    grpc::ClientContext context;
+    const grpc::Slice no_fields("");  // HealthCheckRequest{service: ""}: the whole server
+    const grpc::ByteBuffer request(&no_fields, 1);
+    grpc::ByteBuffer response;
+    std::promise<grpc::Status> done;
+    generic.UnaryCall(&context, "/grpc.health.v1.Health/Check", grpc::StubOptions(), &request,
+                      &response, [&done](grpc::Status status) { done.set_value(status); });
+    const grpc::Status status = done.get_future().get();
+    ASSERT_TRUE(status.ok()) << status.error_message();
+    std::vector<grpc::Slice> slices;
+    ASSERT_TRUE(response.Dump(&slices).ok());
+    std::string bytes;
+    for (const grpc::Slice& slice : slices) {
+      bytes.append(reinterpret_cast<const char*>(slice.begin()), slice.size());
+    }
+    EXPECT_EQ(bytes, std::string("\x08\x01", 2)) << "HealthCheckResponse{status: SERVING}";
+  }
+  grpc::ClientContext context;
+  grpc::CompletionQueue queue;
+  auto call = generic.PrepareCall(
+      &context, "/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo", &queue);
+  void* tag = nullptr;
+  bool ok = false;
+  call->StartCall(reinterpret_cast<void*>(1));
+  ASSERT_TRUE(queue.Next(&tag, &ok) && ok);
+  const std::string list_services("\x3a\x01*", 3);  // ServerReflectionRequest{list_services: "*"}
+  const grpc::Slice request_slice(list_services);
+  const grpc::ByteBuffer request(&request_slice, 1);
+  call->Write(request, reinterpret_cast<void*>(2));
+  ASSERT_TRUE(queue.Next(&tag, &ok) && ok);
+  grpc::ByteBuffer response;
+  call->Read(&response, reinterpret_cast<void*>(3));
+  ASSERT_TRUE(queue.Next(&tag, &ok) && ok);
+  std::vector<grpc::Slice> slices;
+  ASSERT_TRUE(response.Dump(&slices).ok());
+  std::string bytes;
+  for (const grpc::Slice& slice : slices) {
+    bytes.append(reinterpret_cast<const char*>(slice.begin()), slice.size());
+  }
+  EXPECT_NE(bytes.find("objmap.v1.MapService"), std::string::npos);
+  EXPECT_NE(bytes.find("grpc.health.v1.Health"), std::string::npos);
+  call->WritesDone(reinterpret_cast<void*>(4));
+  ASSERT_TRUE(queue.Next(&tag, &ok));
+  context.TryCancel();
+  grpc::Status finished;
+  call->Finish(&finished, reinterpret_cast<void*>(5));
+  while (queue.Next(&tag, &ok) && tag != reinterpret_cast<void*>(5)) {
+  }
+  queue.Shutdown();
+  while (queue.Next(&tag, &ok)) {
+  }
+}
+
+// Test-only certificates and keys (tests/data/tls/README.md).
+std::string TlsFile(const std::string& name) {
+  const std::string here = __FILE__;
+  return here.substr(0, here.rfind('/')) + "/../data/tls/" + name;
+}
+
+TEST(AccessTokens, ParseReadAndWriteTokensAndNameBadLines) {
+  AccessTokens tokens;
+  std::string why;
+  ASSERT_TRUE(AccessTokens::Parse("# fleet\nread  reader-0123456789abcdef\n\nwrite "
+                                  "writer-0123456789abcdef\r\n",
+                                  "t.txt", &tokens, &why))
+      << why;
+  EXPECT_EQ(tokens.Find("reader-0123456789abcdef"), Access::kRead);
+  EXPECT_EQ(tokens.Find("writer-0123456789abcdef"), Access::kReadWrite);
+  EXPECT_EQ(tokens.Find("writer-0123456789abcdeF"), Access::kNone);
+  EXPECT_EQ(tokens.Find(""), Access::kNone);
+  EXPECT_EQ(BearerToken("Bearer abc"), "abc");
+  EXPECT_EQ(BearerToken("Basic abc"), "");
+  EXPECT_EQ(BearerToken("Bearer "), "");
+  const std::pair<const char*, const char*> bad[] = {
+      {"admin 0123456789abcdef0\n", "t.txt:1: expected 'read TOKEN' or 'write TOKEN'"},
+      {"read short\n", "t.txt:1: a token is at least 16 printable characters without spaces"},
+      {"read 0123456789abcdef0 extra\n", "t.txt:1: expected one token after 'read'"},
+      {"read 0123456789abcdef0\nwrite 0123456789abcdef0\n", "t.txt:2: the token appears twice"},
+      {"# nothing\n", "t.txt: no tokens (lines 'read TOKEN' or 'write TOKEN')"},
+  };
+  for (const auto& [text, reason] : bad) {
+    EXPECT_FALSE(AccessTokens::Parse(text, "t.txt", &tokens, &why)) << text;
+    EXPECT_EQ(why, reason);
+  }
+}
+
+// TLS with client certificates and bearer tokens, through the client library: a read token
+// queries but cannot write, a write token does both, no token or a wrong one is refused, and a
+// plain or certificate-less client does not get through.
+TEST_F(MapServiceTest, TlsClientCertificatesAndTokensGuardTheService) {
+  AccessTokens tokens;
+  std::string why;
+  const std::string kRead = "read-token-0123456789", kWrite = "write-token-0123456789";
+  ASSERT_TRUE(AccessTokens::Parse("read " + kRead + "\nwrite " + kWrite + "\n", "tokens", &tokens,
+                                  &why))
+      << why;
+  Stop();
+  GrpcServerOptions options;
+  options.tls_cert_path = TlsFile("server.pem");
+  options.tls_key_path = TlsFile("server.key");
+  options.tls_client_ca_path = TlsFile("ca.pem");
+  Start(64, options, tokens);
+  const std::string address = AddressWithPort("127.0.0.1:0", port_);
+  const auto client = [&](const std::string& token, bool tls, bool certificate) {
+    MapClientOptions client_options;
+    client_options.deadline_s = 10;
+    client_options.token = token;
+    if (tls) client_options.tls_ca_path = TlsFile("ca.pem");
+    if (certificate) {
+      client_options.tls_cert_path = TlsFile("client.pem");
+      client_options.tls_key_path = TlsFile("client.key");
+    }
+    return std::make_unique<MapClient>(address, client_options);
+  };
+  v1::InventoryResponse inventory;
+  v1::AddKeyframeResponse added;
+
+  auto reader = client(kRead, true, true);
+  grpc::Status status = reader->Inventory(v1::InventoryRequest(), &inventory);
+  EXPECT_TRUE(status.ok()) << status.error_message();
+  status = reader->AddKeyframe(Keyframe(0), &added);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::PERMISSION_DENIED);
+  EXPECT_EQ(status.error_message(),
+            "AddKeyframe changes the map and needs a read-write token; this one is read-only");
+
+  auto writer = client(kWrite, true, true);
+  status = writer->AddKeyframe(Keyframe(0), &added);
+  EXPECT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(map_server_->Status().keyframes, 1u);
+
+  status = client("", true, true)->Inventory(v1::InventoryRequest(), &inventory);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  EXPECT_EQ(status.error_message(),
+            "this server needs a bearer token (metadata 'authorization: Bearer TOKEN')");
+  status = client("guessed-token-0123456789", true, true)->Inventory(v1::InventoryRequest(),
+                                                                     &inventory);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  EXPECT_EQ(status.error_message(), "unknown bearer token");
+
+  // Without TLS, or without a client certificate, no call reaches the service.
+  status = client(kWrite, false, false)->Inventory(v1::InventoryRequest(), &inventory);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::UNAVAILABLE) << status.error_message();
+  status = client(kWrite, true, false)->Inventory(v1::InventoryRequest(), &inventory);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::UNAVAILABLE) << status.error_message();
+  EXPECT_EQ(map_server_->Status().keyframes, 1u);
+
+  // A client whose CA file is missing says so instead of connecting.
+  MapClientOptions missing_ca;
+  missing_ca.tls_ca_path = TlsFile("absent.pem");
+  status = MapClient(address, missing_ca).Inventory(v1::InventoryRequest(), &inventory);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("absent.pem: cannot read the CA certificate"),
+            std::string::npos)
+      << status.error_message();
 }
 
 TEST_F(MapServiceTest, OversizedRequestsAreRefusedAndTheServerKeepsServing) {

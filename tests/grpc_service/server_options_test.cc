@@ -62,5 +62,48 @@ TEST(ServerOptions, DefaultsToLoopbackAndRejectsBadCommandLines) {
   EXPECT_EQ(why, "--listen: listen address 'localhost' must be host:port");
 }
 
+// Serving other machines without TLS and tokens is refused unless asked for with --insecure.
+TEST(ServerOptions, AnAddressOtherMachinesReachNeedsTlsAndTokensOrInsecure) {
+  for (const char* loopback : {"127.0.0.1:0", "127.1.2.3:50051", "localhost:1", "[::1]:1"}) {
+    EXPECT_TRUE(grpc_service::IsLoopbackAddress(loopback)) << loopback;
+  }
+  for (const char* exposed : {"0.0.0.0:50051", "[::]:50051", "192.168.1.20:1", "robot:50051"}) {
+    EXPECT_FALSE(grpc_service::IsLoopbackAddress(exposed)) << exposed;
+  }
+  std::string why;
+  ServerOptions options;
+  const char* exposed[] = {"objmap_server", "--db", "m.db", "--listen", "0.0.0.0:50051"};
+  EXPECT_FALSE(ParseServerOptions(5, exposed, &options, &why));
+  EXPECT_EQ(why,
+            "--listen: listen address 0.0.0.0:50051 reaches other machines: serve it with TLS and "
+            "tokens (--tls-cert, --tls-key, --tokens), or give --insecure to serve it without");
+
+  options = ServerOptions{};
+  const char* insecure[] = {"objmap_server", "--db", "m.db", "--listen", "0.0.0.0:50051",
+                            "--insecure"};
+  ASSERT_TRUE(ParseServerOptions(6, insecure, &options, &why)) << why;
+  EXPECT_TRUE(options.grpc.insecure);
+  EXPECT_TRUE(options.grpc.ExposedWithoutProtection());
+
+  options = ServerOptions{};
+  const char* protected_[] = {"objmap_server", "--db",      "m.db",     "--listen",
+                              "0.0.0.0:50051", "--tls-cert", "s.pem",   "--tls-key",
+                              "s.key",         "--tokens",   "t.txt",   "--tls-client-ca",
+                              "ca.pem"};
+  ASSERT_TRUE(ParseServerOptions(13, protected_, &options, &why)) << why;
+  EXPECT_FALSE(options.grpc.ExposedWithoutProtection());
+  EXPECT_EQ(options.grpc.tls_client_ca_path, "ca.pem");
+  EXPECT_EQ(options.grpc.tokens_path, "t.txt");
+
+  options = ServerOptions{};
+  const char* cert_only[] = {"objmap_server", "--db", "m.db", "--tls-cert", "s.pem"};
+  EXPECT_FALSE(ParseServerOptions(5, cert_only, &options, &why));
+  EXPECT_EQ(why, "TLS needs both a certificate and its key (--tls-cert and --tls-key)");
+  options = ServerOptions{};
+  const char* ca_only[] = {"objmap_server", "--db", "m.db", "--tls-client-ca", "ca.pem"};
+  EXPECT_FALSE(ParseServerOptions(5, ca_only, &options, &why));
+  EXPECT_EQ(why, "client certificates (--tls-client-ca) need TLS (--tls-cert and --tls-key)");
+}
+
 }  // namespace
 }  // namespace objmap

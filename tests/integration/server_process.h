@@ -79,6 +79,7 @@ class ServerProcess {
 
   [[nodiscard]] const std::string& address() const { return address_; }
   [[nodiscard]] bool running() const { return pid_ > 0; }
+  [[nodiscard]] pid_t pid() const { return pid_; }
 
   /// Sends `signal` and reaps the process; returns its exit code (or 128 + the signal).
   int Kill(int signal) {

@@ -35,10 +35,24 @@ struct MapClientOptions {
   int max_message_bytes = 64 * 1024 * 1024;
   /// How AddKeyframe(RgbdFrame) and the ingest writer encode frames.
   KeyframeEncoding encoding;
+  /// TLS: verify the server's certificate against this CA certificate (PEM file); empty: a
+  /// plain connection.
+  std::string tls_ca_path;
+  /// Mutual TLS: this client's certificate chain and key (PEM files), for a server that asks
+  /// for one (both or neither; they need tls_ca_path).
+  std::string tls_cert_path;
+  std::string tls_key_path;
+  /// Bearer token sent with every call (metadata `authorization: Bearer TOKEN`); empty: none.
+  /// Read it from a file (ReadTokenFile), not from the command line.
+  std::string token;
 
   /// False with the offending field named when a value is out of range.
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
+
+/// The token in `path`: its first line that is neither empty nor a # comment, trimmed. False
+/// with a reason naming the file otherwise.
+[[nodiscard]] bool ReadTokenFile(const std::string& path, std::string* token, std::string* why);
 
 class IngestWriter;
 

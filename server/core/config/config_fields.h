@@ -127,6 +127,11 @@ void VisitObjmapConfig(ObjmapConfig* c, Visitor& v) {
   v("max_listed_voxels", &s.max_listed_voxels);
   v("checkpoint_every_keyframes", &s.checkpoint_every_keyframes);
   v("checkpoint_work_ratio", &s.checkpoint_work_ratio);
+  // The request limits (RequestLimits) sit beside the server's other bounds.
+  v("max_image_pixels", &s.limits.max_image_pixels);
+  v("max_detections_per_keyframe", &s.limits.max_detections_per_keyframe);
+  v("max_poses_per_update", &s.limits.max_poses_per_update);
+  v("max_string_bytes", &s.limits.max_string_bytes);
   v.Section("store");
   v("color_jpeg_quality", &s.store.color_jpeg_quality);
   v("busy_timeout_ms", &s.store.busy_timeout_ms);

@@ -57,7 +57,7 @@ StoreChange AllObjectsChange(const Mapper& mapper) {
 }  // namespace
 
 bool MapServerConfig::IsValid(std::string* why) const {
-  if (!mapper.IsValid(why) || !store.IsValid(why)) return false;
+  if (!mapper.IsValid(why) || !store.IsValid(why) || !limits.IsValid(why)) return false;
   if (max_queue < 1 || change_history < 1 || max_listed_voxels < 1) {
     *why = "MapServerConfig: max_queue, change_history and max_listed_voxels must be >= 1";
     return false;
@@ -78,6 +78,8 @@ bool MapServerConfig::IsValid(std::string* why) const {
 }
 
 MapServer::MapServer() : impl_(std::make_unique<Impl>()) {}
+
+const RequestLimits& MapServer::limits() const { return impl_->config.limits; }
 
 MapServer::~MapServer() {
   Shutdown();

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "detection/detector.h"
+#include "map_server/request_limits.h"
 #include "mapper/mapper.h"
 #include "objects/voxel_model.h"
 #include "occupancy/occupancy_map.h"
@@ -63,6 +64,8 @@ struct MapServerConfig {
   /// what saving that checkpoint took: a large map, slower to save, is saved less often, and
   /// saving never takes more than about 1 / (1 + this) of the mapping thread's time.
   double checkpoint_work_ratio = 10.0;
+  /// What one request may ask (config section server: max_image_pixels, ...).
+  RequestLimits limits;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
@@ -242,6 +245,8 @@ class MapServer {
                                             std::uint64_t* version) const;
 
   [[nodiscard]] ServerStatus Status() const;
+  /// The limits on one request this server was opened with.
+  [[nodiscard]] const RequestLimits& limits() const;
 
   /// Changes with version > `since_version`, oldest first. Waits up to `timeout` when there are
   /// none yet; returns empty on timeout or shutdown. When `since_version` is older than the

@@ -17,12 +17,20 @@ bool CameraIntrinsics::IsValid(std::string* why) const {
     SetWhy(why, "intrinsics: width and height must be positive");
     return false;
   }
-  if (!std::isfinite(fx) || !std::isfinite(fy) || fx <= 0.0 || fy <= 0.0) {
-    SetWhy(why, "intrinsics: fx and fy must be finite and positive");
+  const auto focal_ok = [](double f) { return f >= kMinFocalPx && f <= kMaxFocalPx; };
+  if (!focal_ok(fx) || !focal_ok(fy)) {
+    std::ostringstream text;
+    text << "intrinsics: fx " << fx << " and fy " << fy << " must lie in [" << kMinFocalPx << ", "
+         << kMaxFocalPx << "] pixels";
+    SetWhy(why, text.str());
     return false;
   }
-  if (!std::isfinite(cx) || !std::isfinite(cy)) {
-    SetWhy(why, "intrinsics: cx and cy must be finite");
+  // NaN fails both comparisons.
+  if (!(cx >= -width && cx <= 2.0 * width) || !(cy >= -height && cy <= 2.0 * height)) {
+    std::ostringstream text;
+    text << "intrinsics: the principal point (cx " << cx << ", cy " << cy
+         << ") must lie within one image size of the " << width << "x" << height << " image";
+    SetWhy(why, text.str());
     return false;
   }
   return true;
@@ -40,6 +48,13 @@ bool IsValidRigidTransform(const Eigen::Matrix4d& T, std::string* why) {
     std::ostringstream text;
     text << "pose is not rigid: |R^T R - I| = " << orthonormal_error
          << ", det(R) = " << R.determinant();
+    SetWhy(why, text.str());
+    return false;
+  }
+  if (T.topRightCorner<3, 1>().cwiseAbs().maxCoeff() > kMaxTranslationM) {
+    std::ostringstream text;
+    text << "pose translation (" << T(0, 3) << ", " << T(1, 3) << ", " << T(2, 3)
+         << ") lies more than " << kMaxTranslationM << " m from the map origin";
     SetWhy(why, text.str());
     return false;
   }
