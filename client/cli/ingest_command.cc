@@ -4,6 +4,7 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <set>
 
 #include "commands.h"
 #include "dataset/keyframe_selector.h"
@@ -29,7 +30,9 @@ constexpr char kIngestUsage[] =
     "  --max-frames N            number of frames to read (default: all)\n"
     "  --max-keyframes N         stop after N keyframes (default: all)\n"
     "  --jpeg                    send colour as JPEG (default: lossless PNG)\n"
-    "  --stop-on-error           stop at the first unreadable frame instead of skipping it\n";
+    "  --stop-on-error           stop at the first unreadable frame instead of skipping it\n"
+    "  --resume                  skip the keyframes the server already holds (by name): goes on\n"
+    "                            after a run that a server crash or restart cut short\n";
 
 constexpr char kCommand[] = "ingest";
 
@@ -39,6 +42,7 @@ struct IngestSettings {
   std::size_t max_frames = 0;     // 0: to the end
   std::size_t max_keyframes = 0;  // 0: all
   bool stop_on_error = false;
+  bool resume = false;
 };
 
 IngestSettings SettingsFrom(Arguments& args) {
@@ -52,6 +56,7 @@ IngestSettings SettingsFrom(Arguments& args) {
   settings.max_frames = static_cast<std::size_t>(args.GetInteger("--max-frames", 0, 0));
   settings.max_keyframes = static_cast<std::size_t>(args.GetInteger("--max-keyframes", 0, 0));
   settings.stop_on_error = args.Has("--stop-on-error");
+  settings.resume = args.Has("--resume");
   return settings;
 }
 
@@ -59,15 +64,31 @@ struct IngestCounts {
   std::size_t frames_read = 0;
   std::size_t keyframes_sent = 0;
   std::size_t skipped = 0;
+  std::size_t already_held = 0;  // keyframes --resume found on the server
   std::string stopped_at;  // the bad frame that ended the run with --stop-on-error
 };
+
+// The names of the keyframes the server holds, read page by page.
+grpc::Status HeldKeyframeNames(MapClient* client, std::set<std::string>* names) {
+  v1::ListKeyframesRequest request;
+  request.set_max_results(1000);
+  while (true) {
+    v1::ListKeyframesResponse page;
+    const grpc::Status status = client->ListKeyframes(request, &page);
+    if (!status.ok()) return status;
+    for (const v1::KeyframeInfo& keyframe : page.keyframes()) names->insert(keyframe.name());
+    if (page.keyframes_size() < request.max_results()) return grpc::Status::OK;
+    request.set_first_id(page.keyframes(page.keyframes_size() - 1).id() + 1);
+  }
+}
 
 // Reads, selects and sends the frames. Returns the stream's status (OK when every keyframe was
 // written); a bad frame is skipped with a message, or ends the run with --stop-on-error (the
 // keyframes before it are still committed by Finish()).
 grpc::Status SendFrames(const SequenceReader& reader, Detector* detections,
                         const IngestSettings& settings, const KeyframeEncoding& encoding,
-                        IngestWriter* writer, IngestCounts* counts) {
+                        const std::set<std::string>& held, IngestWriter* writer,
+                        IngestCounts* counts) {
   const std::size_t end = settings.max_frames == 0
                               ? reader.size()
                               : std::min(reader.size(), settings.first_frame + settings.max_frames);
@@ -83,7 +104,11 @@ grpc::Status SendFrames(const SequenceReader& reader, Detector* detections,
     v1::AddKeyframeRequest request;
     bool ok = reader.ReadFrame(index, &frame, &why);
     ++counts->frames_read;
-    if (ok && selector.IsKeyframe(frame.T_W_C)) {
+    // The selector sees every frame, held or not, so a resumed run picks the same keyframes.
+    const bool keyframe = ok && selector.IsKeyframe(frame.T_W_C);
+    if (keyframe && held.count(frame.name) > 0) {
+      ++counts->already_held;
+    } else if (keyframe) {
       ok = (detections == nullptr || detections->Detect(frame, &found, &why)) &&
            MakeAddKeyframeRequest(frame, detections == nullptr ? nullptr : &found, encoding,
                                   &request, &why);
@@ -112,6 +137,7 @@ grpc::Status SendFrames(const SequenceReader& reader, Detector* detections,
 void PrintSummary(const IngestCounts& counts, const v1::IngestSummary& summary, double wall_s) {
   std::cout << "keyframes: " << summary.keyframes_added() << " added of " << counts.frames_read
             << " frames read";
+  if (counts.already_held > 0) std::cout << ", " << counts.already_held << " already held";
   if (summary.keyframes_added() > 0) {
     std::cout << " (ids " << summary.first_keyframe_id() << ".." << summary.last_keyframe_id()
               << ")";
@@ -141,21 +167,41 @@ bool OpenInputs(Arguments& args, const IngestSettings& settings,
   return *detections != nullptr;
 }
 
+// After a failed stream: how many of this run's keyframes the server acknowledged (committed),
+// from its keyframe count before and now, and how to go on.
+void PrintAcknowledged(MapClient* client, std::int64_t keyframes_before, std::size_t sent) {
+  v1::StatusResponse now;
+  if (client->Status(v1::StatusRequest(), &now).ok()) {
+    std::cerr << "\n" << now.keyframes() - keyframes_before << " of the " << sent
+              << " keyframes sent were acknowledged (stored); ";
+  } else {
+    std::cerr << "\n" << sent << " keyframes were sent; the server does not answer, so how many "
+              << "it stored is not known; ";
+  }
+  std::cerr << "run again with --resume to send only the keyframes it does not hold\n";
+}
+
 // Streams the keyframes and prints the summary; returns the exit code.
 int Ingest(MapClient* client, const SequenceReader& reader, Detector* detections,
-           const IngestSettings& settings) {
+           const IngestSettings& settings, std::int64_t keyframes_before) {
   const auto start = std::chrono::steady_clock::now();
   IngestCounts counts;
+  std::set<std::string> held;
+  if (settings.resume) {
+    const grpc::Status listed = HeldKeyframeNames(client, &held);
+    if (!listed.ok()) return FailWithStatus(kCommand, listed);
+    std::cout << "resuming: the server holds " << held.size()
+              << " keyframes; frames it holds by name are not sent again" << std::endl;
+  }
   std::unique_ptr<IngestWriter> writer = client->StartIngest();
-  grpc::Status status =
-      SendFrames(reader, detections, settings, client->options().encoding, writer.get(), &counts);
+  grpc::Status status = SendFrames(reader, detections, settings, client->options().encoding, held,
+                                   writer.get(), &counts);
+  v1::IngestSummary summary;
+  if (status.ok()) status = writer->Finish(&summary);
   if (!status.ok()) {
-    std::cerr << "\nthe stream ended after " << counts.keyframes_sent << " keyframes were sent\n";
+    PrintAcknowledged(client, keyframes_before, counts.keyframes_sent);
     return FailWithStatus(kCommand, status);
   }
-  v1::IngestSummary summary;
-  status = writer->Finish(&summary);
-  if (!status.ok()) return FailWithStatus(kCommand, status);
   PrintSummary(counts, summary,
                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   if (!counts.stopped_at.empty()) return Fail(kCommand, "stopped at " + counts.stopped_at);
@@ -168,7 +214,7 @@ int RunIngestCommand(int argc, char** argv) {
   Arguments args(argc, argv,
                  WithServerFlags({"--detections", "--min-translation", "--min-rotation",
                                   "--first-frame", "--max-frames", "--max-keyframes"}),
-                 {"--every-frame", "--jpeg", "--stop-on-error", "--help"});
+                 {"--every-frame", "--jpeg", "--stop-on-error", "--resume", "--help"});
   const std::string usage = std::string(kIngestUsage) + kServerOptionsUsage;
   if (args.Has("--help")) {
     std::cout << usage;
@@ -192,7 +238,7 @@ int RunIngestCommand(int argc, char** argv) {
             << " (map version " << before.map_version() << ", " << before.keyframes()
             << " keyframes); detections from "
             << (detections ? args.Get("--detections", "") : "the server's detector") << std::endl;
-  return Ingest(client.get(), *reader, detections.get(), settings);
+  return Ingest(client.get(), *reader, detections.get(), settings, before.keyframes());
 }
 
 }  // namespace objmap::cli
