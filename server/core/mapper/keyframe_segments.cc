@@ -695,9 +695,9 @@ std::vector<SegmentedDetection> SegmentDetections(
     for (const StackLayer& layer : layers) {
       // The layer speaks for its best-scoring box; the group's first box keeps what its entry
       // gathered from other classes' detections of the same segment.
-      const int best = *std::max_element(layer.boxes.begin(), layer.boxes.end(), [&](int a, int b) {
-        return group.scores[a] < group.scores[b];
-      });
+      const std::vector<float>& scores = group.scores;  // a structured binding is not captured
+      const int best = *std::max_element(layer.boxes.begin(), layer.boxes.end(),
+                                         [&scores](int a, int b) { return scores[a] < scores[b]; });
       Detection detection;
       detection.class_id = segmented[root].observation.class_scores.front().first;
       detection.score = group.scores[best];
