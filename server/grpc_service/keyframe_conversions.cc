@@ -7,7 +7,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "grpc_service/conversions.h"
-#include "grpc_service/image_header.h"
+#include "types/image_header.h"
 
 namespace objmap::grpc_service {
 namespace {

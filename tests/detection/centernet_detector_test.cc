@@ -101,6 +101,20 @@ TEST(CenterNetDetectorTest, RejectsBadConfigAndMissingModel) {
   EXPECT_NE(why.find("/nonexistent/centernet.pb"), std::string::npos) << why;
 }
 
+// The converted graph fixes its upsampling sizes: another input size fails when the model is
+// loaded, not on every frame.
+TEST(CenterNetDetectorTest, AnInputSizeTheGraphDoesNotTakeIsRefusedAtLoad) {
+  OBJMAP_REQUIRE_PATH(kModelPath);
+  CenterNetConfig config;
+  config.model_path = kModelPath;
+  config.input_size = 768;
+  std::string why;
+  EXPECT_EQ(MakeCenterNetDetector(config, &why), nullptr);
+  EXPECT_NE(why.find("does not run at input_size 768"), std::string::npos) << why;
+  config.input_size = 512;
+  EXPECT_NE(MakeCenterNetDetector(config, &why), nullptr) << why;
+}
+
 TEST(CenterNetDetectorTest, EmptyImageIsAnErrorNamingTheFrame) {
   OBJMAP_REQUIRE_PATH(kModelPath);
   std::unique_ptr<Detector> detector = MakeDetector(0.15f);

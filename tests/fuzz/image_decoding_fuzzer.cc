@@ -3,14 +3,14 @@
 #include <cstdint>
 #include <string>
 
-#include "grpc_service/image_header.h"
+#include "types/image_header.h"
 #include "grpc_service/keyframe_conversions.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string bytes(reinterpret_cast<const char*>(data), size);
   int width = 0, height = 0;
-  const bool png = objmap::grpc_service::ReadPngSize(bytes, &width, &height);
-  if (!png && !objmap::grpc_service::ReadJpegSize(bytes, &width, &height)) return 0;
+  const bool png = objmap::ReadPngSize(bytes, &width, &height);
+  if (!png && !objmap::ReadJpegSize(bytes, &width, &height)) return 0;
   if (width <= 0 || height <= 0 || static_cast<std::int64_t>(width) * height > (1 << 16)) {
     return 0;
   }

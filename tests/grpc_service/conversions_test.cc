@@ -9,7 +9,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "grpc_service/image_header.h"
+#include "types/image_header.h"
 #include "grpc_service/keyframe_conversions.h"
 #include "types/coco_classes.h"
 

@@ -10,6 +10,7 @@
 #include <atomic>
 #include <thread>
 
+#include "store/keyframe_codec.h"
 #include "store_test_data.h"
 
 namespace objmap {
@@ -176,6 +177,29 @@ TEST_F(KeyframeStoreTest, ASecondStoreOnADatabaseInUseIsRefusedNamingItsHolder) 
   ::kill(child, SIGKILL);
   ::waitpid(child, nullptr, 0);
   EXPECT_NE(OpenStore(Path()), nullptr) << "the lock died with its process";
+}
+
+// An image blob is checked against its keyframe's size by its header, before it is decoded: a
+// damaged blob claiming a huge image costs nothing to refuse.
+TEST(KeyframeCodec, AnImageBlobOfAnotherSizeIsRefusedByItsHeader) {
+  ColorImage big;
+  big.width = 32;
+  big.height = 24;
+  big.rgb.assign(32 * 24 * 3, 90);
+  store_internal::Bytes jpeg;
+  std::string why;
+  ASSERT_TRUE(store_internal::EncodeColorJpeg(big, 90, &jpeg, &why)) << why;
+  ColorImage decoded;
+  EXPECT_FALSE(store_internal::DecodeColorJpeg(jpeg.data(), jpeg.size(), 8, 6, &decoded, &why));
+  EXPECT_EQ(why, "image blob is 32x24, its keyframe 8x6");
+  EXPECT_TRUE(store_internal::DecodeColorJpeg(jpeg.data(), jpeg.size(), 32, 24, &decoded, &why))
+      << why;
+  const std::vector<std::uint16_t> depth(32 * 24, 1000);
+  store_internal::Bytes png;
+  ASSERT_TRUE(store_internal::EncodeDepthPng(depth, 32, 24, &png, &why)) << why;
+  std::vector<std::uint16_t> depth_back;
+  EXPECT_FALSE(store_internal::DecodeDepthPng(png.data(), png.size(), 64, 48, &depth_back, &why));
+  EXPECT_EQ(why, "image blob is 32x24, its keyframe 64x48");
 }
 
 // The database holds the camera's images: it and its WAL are readable by the owner only.

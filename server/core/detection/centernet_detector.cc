@@ -207,7 +207,23 @@ std::unique_ptr<Detector> MakeCenterNetDetector(const CenterNetConfig& config, s
   net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
   net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
   if (config.num_threads > 0) cv::setNumThreads(config.num_threads);
-  return std::make_unique<CenterNetDetector>(config, std::move(net));
+  auto detector = std::make_unique<CenterNetDetector>(config, std::move(net));
+  // One pass on a blank image now: a graph converted for another input size (its upsampling
+  // sizes are fixed) would otherwise fail on every frame, each skipped with the same reason.
+  RgbdFrame trial;
+  trial.name = "a blank " + std::to_string(config.input_size) + " px test image";
+  trial.color.width = trial.color.height = config.input_size;
+  trial.color.rgb.assign(static_cast<std::size_t>(config.input_size) * config.input_size * 3, 0);
+  std::vector<Detection> none;
+  std::string failure;
+  if (!detector->Detect(trial, &none, &failure)) {
+    SetWhy(why, "centernet: " + config.model_path + " does not run at input_size " +
+                    std::to_string(config.input_size) +
+                    " (a converted graph keeps the size it was converted for; "
+                    "scripts/convert_centernet.py makes 512): " + failure);
+    return nullptr;
+  }
+  return detector;
 }
 
 }  // namespace objmap

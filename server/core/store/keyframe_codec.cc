@@ -1,8 +1,11 @@
 #include "store/keyframe_codec.h"
 
+#include <algorithm>
 #include <cstring>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+
+#include "types/image_header.h"
 
 namespace objmap {
 namespace store_internal {
@@ -51,6 +54,17 @@ bool DecodeImage(const std::uint8_t* data, std::size_t bytes, int flags, int typ
                  int height, cv::Mat* image, std::string* why) {
   if (bytes == 0) {
     *why = "empty image blob";
+    return false;
+  }
+  // The header's size first: a damaged blob claiming a huge image would otherwise be decoded
+  // (gigabytes) before its size is compared.
+  const std::string head(reinterpret_cast<const char*>(data), std::min<std::size_t>(bytes, 65536));
+  int header_width = 0, header_height = 0;
+  if ((ReadPngSize(head, &header_width, &header_height) ||
+       ReadJpegSize(head, &header_width, &header_height)) &&
+      (header_width != width || header_height != height)) {
+    *why = "image blob is " + std::to_string(header_width) + "x" + std::to_string(header_height) +
+           ", its keyframe " + std::to_string(width) + "x" + std::to_string(height);
     return false;
   }
   try {

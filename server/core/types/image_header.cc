@@ -1,8 +1,8 @@
-#include "grpc_service/image_header.h"
+#include "types/image_header.h"
 
 #include <cstdint>
 
-namespace objmap::grpc_service {
+namespace objmap {
 namespace {
 
 std::uint32_t ReadBigEndian(const std::string& data, std::size_t offset, int size) {
@@ -74,4 +74,4 @@ bool ReadJpegSize(const std::string& data, int* width, int* height) {
   return false;
 }
 
-}  // namespace objmap::grpc_service
+}  // namespace objmap

@@ -4,7 +4,7 @@
 
 #include <string>
 
-namespace objmap::grpc_service {
+namespace objmap {
 
 /// Width and height from a PNG's IHDR chunk; false when `data` does not start like a PNG.
 [[nodiscard]] bool ReadPngSize(const std::string& data, int* width, int* height);
@@ -13,4 +13,4 @@ namespace objmap::grpc_service {
 /// false when `data` is not a JPEG or ends before one.
 [[nodiscard]] bool ReadJpegSize(const std::string& data, int* width, int* height);
 
-}  // namespace objmap::grpc_service
+}  // namespace objmap
