@@ -543,6 +543,32 @@ TEST_F(MapServerScene, NonRigidCorrectionReassociatesAndTheStoreKeepsTheNewGroup
 // The process dies after UpdatePoses stored the corrected poses and before the regeneration
 // committed (simulated: the store gets exactly what UpdatePoses commits, and no server runs).
 // The restart finds the pose update pending and re-associates with the stored poses.
+// Pose updates that queue behind one another share one regeneration (and one map version): a
+// flood of small updates costs a regeneration or two, not one each, and the last poses win.
+TEST_F(MapServerScene, QueuedPoseUpdatesShareOneRegeneration) {
+  auto server = OpenServer();
+  ASSERT_TRUE(server);
+  IngestWithTheThirdViewDrifted(server.get());
+  const std::uint64_t before = server->Status().map_version;
+  PoseUpdateOutcome outcome;
+  for (int i = 0; i < 20; ++i) {
+    Eigen::Isometry3d shifted = Pose(2);
+    shifted.pretranslate(Eigen::Vector3d(0.0, 0.01 * i, 0.0));
+    ASSERT_TRUE(server->UpdatePoses({{3, shifted}}, /*wait=*/false, &outcome).ok());
+  }
+  ASSERT_TRUE(server->UpdatePoses({{3, Pose(2)}}, /*wait=*/true, &outcome).ok());
+  const std::uint64_t after = server->Status().map_version;
+  EXPECT_GE(after - before, 1u);
+  EXPECT_LE(after - before, 4u) << "21 updates, " << after - before << " regenerations";
+  EXPECT_EQ(outcome.map_version, after);
+  std::vector<KeyframeSummary> keyframes;
+  std::uint64_t version = 0;
+  ASSERT_TRUE(server->ListKeyframes(3, 1, &keyframes, &version).ok());
+  ASSERT_EQ(keyframes.size(), 1u);
+  EXPECT_TRUE(keyframes[0].T_W_C.isApprox(Pose(2), 1e-9)) << "the last update wins";
+  EXPECT_EQ(Cups(*server, true).size(), 2u) << "the corrected view's cups joined the others";
+}
+
 TEST_F(MapServerScene, ARestartFinishesAnInterruptedPoseUpdate) {
   auto server = OpenServer();
   ASSERT_TRUE(server);

@@ -177,6 +177,7 @@ void MapServer::Impl::Run() {
       queue_cv.wait(lock, [this] { return stopping || !queue.empty(); });
       if (queue.empty()) break;  // stopping, and everything queued is done
       job = queue.front();
+      applying = job.get();  // from now on no pose update merges into it
     }
     MapJob::Result result =
         job->kind == MapJob::Kind::kKeyframe ? ApplyKeyframe(job.get()) : ApplyPoses(job.get());
@@ -184,6 +185,7 @@ void MapServer::Impl::Run() {
       // Popped only now, so Status() counts the job being applied as queued.
       std::lock_guard<std::mutex> lock(queue_mutex);
       queue.pop_front();
+      applying = nullptr;
     }
     job->done.set_value(std::move(result));
     MaybeCheckpoint(/*force=*/false);  // after the answer: the caller does not wait for it
@@ -359,7 +361,7 @@ ServiceStatus MapServer::AddKeyframe(RgbdFrame frame,
     }
   }
   job->frame = std::move(frame);
-  std::future<MapJob::Result> done = job->done.get_future();
+  const std::shared_future<MapJob::Result> done = job->result;
   ServiceStatus queued = impl_->Enqueue(job, /*bounded=*/true);
   if (!queued.ok()) return queued;
   MapJob::Result result = done.get();
@@ -387,7 +389,6 @@ ServiceStatus MapServer::UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3
   auto job = std::make_shared<MapJob>();
   job->kind = MapJob::Kind::kPoses;
   job->poses = poses;
-  std::future<MapJob::Result> done = job->done.get_future();
   {
     // Durable before acknowledging (a restart regenerates with these poses), and stored and
     // queued under the queue lock, so that a shutdown cannot fall between the two: poses the
@@ -401,9 +402,20 @@ ServiceStatus MapServer::UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3
     if (!impl_->store->Commit(change, &why)) {
       return {StatusCode::kInternal, "poses not stored: " + why};
     }
-    ServiceStatus queued = impl_->EnqueueLocked(job, /*bounded=*/false);
-    if (!queued.ok()) return queued;
+    // A pose update queued behind another that has not started joins it: one regeneration
+    // applies both (later poses win), so a flood of small updates costs one regeneration, not
+    // one each, and the queue holds at most one waiting pose update.
+    std::deque<std::shared_ptr<MapJob>>& queue = impl_->queue;
+    if (!queue.empty() && queue.back()->kind == MapJob::Kind::kPoses &&
+        queue.back().get() != impl_->applying) {
+      for (const auto& [id, T_W_C] : poses) queue.back()->poses[id] = T_W_C;
+      job = queue.back();
+    } else {
+      ServiceStatus queued = impl_->EnqueueLocked(job, /*bounded=*/false);
+      if (!queued.ok()) return queued;
+    }
   }
+  const std::shared_future<MapJob::Result> done = job->result;
   *outcome = PoseUpdateOutcome{};
   outcome->map_version = job->version;
   if (!wait) return ServiceStatus::Ok();

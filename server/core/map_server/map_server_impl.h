@@ -31,6 +31,8 @@ struct MapJob {
     PoseUpdateOutcome poses;
   };
   std::promise<Result> done;
+  /// Every caller waiting on this job (pose updates merged into one job share it).
+  std::shared_future<Result> result = done.get_future().share();
 };
 
 struct MapServer::Impl {
@@ -48,6 +50,7 @@ struct MapServer::Impl {
   std::condition_variable queue_cv;
   std::deque<std::shared_ptr<MapJob>> queue;
   std::uint64_t planned_version = 0;  // last version handed to a job (queue_mutex)
+  const MapJob* applying = nullptr;   // the job the mapping thread works on (queue_mutex)
   bool stopping = false;              // queue_mutex
   std::atomic<bool> shutting_down{false};
   std::thread worker;
