@@ -4,24 +4,12 @@
 
 #include <cmath>
 #include <fstream>
-#include <sstream>
 
 #include "client_internal.h"
+#include "pem_file.h"
 
 namespace objmap {
 namespace {
-
-bool ReadPem(const std::string& path, const char* what, std::string* pem, std::string* why) {
-  std::ifstream file(path, std::ios::binary);
-  std::ostringstream text;
-  if (file) text << file.rdbuf();
-  *pem = text.str();
-  if (!file || pem->find("-----BEGIN") == std::string::npos) {
-    *why = path + ": cannot read the " + std::string(what) + " (a PEM file)";
-    return false;
-  }
-  return true;
-}
 
 // Plain, or TLS verified against the options' CA (with the client's certificate for mutual TLS).
 bool MakeCredentials(const MapClientOptions& options,
@@ -31,10 +19,10 @@ bool MakeCredentials(const MapClientOptions& options,
     return true;
   }
   grpc::SslCredentialsOptions tls;
-  if (!ReadPem(options.tls_ca_path, "CA certificate", &tls.pem_root_certs, why)) return false;
+  if (!ReadPemFile(options.tls_ca_path, "CA certificate", &tls.pem_root_certs, why)) return false;
   if (!options.tls_cert_path.empty() &&
-      (!ReadPem(options.tls_cert_path, "client certificate", &tls.pem_cert_chain, why) ||
-       !ReadPem(options.tls_key_path, "client key", &tls.pem_private_key, why))) {
+      (!ReadPemFile(options.tls_cert_path, "client certificate", &tls.pem_cert_chain, why) ||
+       !ReadPemFile(options.tls_key_path, "client key", &tls.pem_private_key, why))) {
     return false;
   }
   *credentials = grpc::SslCredentials(tls);

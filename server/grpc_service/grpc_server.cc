@@ -3,23 +3,10 @@
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/health_check_service_interface.h>
 
-#include <fstream>
-#include <sstream>
+#include "pem_file.h"
 
 namespace objmap::grpc_service {
 namespace {
-
-bool ReadPem(const std::string& path, const char* what, std::string* pem, std::string* why) {
-  std::ifstream file(path, std::ios::binary);
-  std::ostringstream text;
-  if (file) text << file.rdbuf();
-  *pem = text.str();
-  if (!file || pem->find("-----BEGIN") == std::string::npos) {
-    *why = path + ": cannot read the " + std::string(what) + " (a PEM file)";
-    return false;
-  }
-  return true;
-}
 
 std::string HostOf(const std::string& address) {
   if (!address.empty() && address[0] == '[') return address.substr(0, address.find(']') + 1);
@@ -72,13 +59,13 @@ std::unique_ptr<grpc::Server> StartGrpcServer(const GrpcServerOptions& options,
   if (options.tls()) {
     grpc::SslServerCredentialsOptions tls;
     grpc::SslServerCredentialsOptions::PemKeyCertPair pair;
-    if (!ReadPem(options.tls_cert_path, "server certificate", &pair.cert_chain, why) ||
-        !ReadPem(options.tls_key_path, "server key", &pair.private_key, why)) {
+    if (!ReadPemFile(options.tls_cert_path, "server certificate", &pair.cert_chain, why) ||
+        !ReadPemFile(options.tls_key_path, "server key", &pair.private_key, why)) {
       return nullptr;
     }
     tls.pem_key_cert_pairs.push_back(std::move(pair));
     if (!options.tls_client_ca_path.empty()) {
-      if (!ReadPem(options.tls_client_ca_path, "client CA certificate", &tls.pem_root_certs,
+      if (!ReadPemFile(options.tls_client_ca_path, "client CA certificate", &tls.pem_root_certs,
                    why)) {
         return nullptr;
       }
