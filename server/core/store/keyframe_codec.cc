@@ -1,9 +1,9 @@
 #include "store/keyframe_codec.h"
 
-#include <algorithm>
 #include <cstring>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <string_view>
 
 #include "types/image_header.h"
 
@@ -58,10 +58,10 @@ bool DecodeImage(const std::uint8_t* data, std::size_t bytes, int flags, int typ
   }
   // The header's size first: a damaged blob claiming a huge image would otherwise be decoded
   // (gigabytes) before its size is compared.
-  const std::string head(reinterpret_cast<const char*>(data), std::min<std::size_t>(bytes, 65536));
+  const std::string_view blob(reinterpret_cast<const char*>(data), bytes);
   int header_width = 0, header_height = 0;
-  if ((ReadPngSize(head, &header_width, &header_height) ||
-       ReadJpegSize(head, &header_width, &header_height)) &&
+  if ((ReadPngSize(blob, &header_width, &header_height) ||
+       ReadJpegSize(blob, &header_width, &header_height)) &&
       (header_width != width || header_height != height)) {
     *why = "image blob is " + std::to_string(header_width) + "x" + std::to_string(header_height) +
            ", its keyframe " + std::to_string(width) + "x" + std::to_string(height);

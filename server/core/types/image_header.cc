@@ -1,11 +1,12 @@
 #include "types/image_header.h"
 
 #include <cstdint>
+#include <string_view>
 
 namespace objmap {
 namespace {
 
-std::uint32_t ReadBigEndian(const std::string& data, std::size_t offset, int size) {
+std::uint32_t ReadBigEndian(std::string_view data, std::size_t offset, int size) {
   std::uint32_t value = 0;
   for (int i = 0; i < size; ++i) {
     value = (value << 8) | static_cast<unsigned char>(data[offset + i]);
@@ -13,7 +14,7 @@ std::uint32_t ReadBigEndian(const std::string& data, std::size_t offset, int siz
   return value;
 }
 
-unsigned char Byte(const std::string& data, std::size_t offset) {
+unsigned char Byte(std::string_view data, std::size_t offset) {
   return static_cast<unsigned char>(data[offset]);
 }
 
@@ -37,7 +38,7 @@ bool ToInt(std::uint32_t width, std::uint32_t height, int* width_out, int* heigh
 
 }  // namespace
 
-bool ReadPngSize(const std::string& data, int* width, int* height) {
+bool ReadPngSize(std::string_view data, int* width, int* height) {
   static const char kSignature[] = "\x89PNG\r\n\x1a\n";
   // Signature (8), IHDR length (4), "IHDR" (4), width (4), height (4).
   if (data.size() < 24 || data.compare(0, 8, kSignature, 8) != 0 ||
@@ -47,7 +48,7 @@ bool ReadPngSize(const std::string& data, int* width, int* height) {
   return ToInt(ReadBigEndian(data, 16, 4), ReadBigEndian(data, 20, 4), width, height);
 }
 
-bool ReadJpegSize(const std::string& data, int* width, int* height) {
+bool ReadJpegSize(std::string_view data, int* width, int* height) {
   if (data.size() < 4 || Byte(data, 0) != 0xFF || Byte(data, 1) != 0xD8) return false;
   std::size_t pos = 2;
   while (pos + 1 < data.size()) {
