@@ -335,7 +335,9 @@ int RunMapCommand(int argc, char** argv) {
     std::cout << ObjmapConfigToYaml(objmap_config);
     return 0;
   }
-  const MapperConfig& mapper_config = objmap_config.map_server.mapper;
+  MapperConfig mapper_config = objmap_config.map_server.mapper;
+  // Nothing queries this map while it is made: one OctoMap copy is enough.
+  mapper_config.occupancy_second_copy = false;
   SequenceRunConfig run_config = RunConfigFrom(args, objmap_config);
   const MapInputOptions input_options = InputOptionsFrom(args, run_config);
   if (!args.error().empty() || args.positional().size() != 1 || !args.Has("--out")) {

@@ -3,18 +3,24 @@
 // regeneration time after a pose-graph update against the number of keyframes, and bytes stored
 // per keyframe. Keyframes of a recorded sequence go through the server's CenterNet detector
 // (as `objmap ingest` sends them); without the model the map has no objects and the bench says so.
-// Last, restart time with the OctoMap checkpoint against re-integrating every keyframe.
+// Then fairness: the same keyframes sent again alone, under 1000 IsFree + RayCast queries a second
+// (open loop: latency counts from when each query was due), and under 50 clients querying back
+// to back. Last, restart time with the OctoMap checkpoint against re-integrating every keyframe.
 //   server_bench [sequence=../shared/data/redkitchen] [keyframes=68] [query_rounds=300]
+//                [fairness_keyframes=12] [busy_clients=50] [queries_per_s=1000]
+//                [heavy_query_threads=config default] [heavy_query_nice=config default]
 #include <sqlite3.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <mutex>
+#include <random>
 #include <string>
 #include <thread>
 #include <vector>
@@ -105,6 +111,110 @@ void PrintLatencies(const char* title, Latencies* latencies) {
   }
 }
 
+// Planner-style queries at a fixed rate from `threads` threads (open loop): query i is due at
+// start + i / rate whether or not the ones before it have returned, and its latency counts from
+// then, so a stalled server shows as latency instead of as fewer queries sent. IsFree (20 cm
+// boxes) and RayCast (1 m rays from the camera) alternate, around `centre`.
+class OpenLoopQueries {
+ public:
+  OpenLoopQueries(MapClient* client, const Eigen::Vector3d& camera, const Eigen::Vector3d& centre,
+                  double rate_per_s, int threads)
+      : client_(client), camera_(camera), centre_(centre), rate_(rate_per_s) {
+    start_ = Clock::now();
+    for (int t = 0; t < threads; ++t) workers_.emplace_back([this, t, threads] { Run(t, threads); });
+  }
+  // Stops and returns the latencies: [0] IsFree, [1] RayCast.
+  std::array<std::vector<double>, 2> Stop(double* achieved_rate, int* failed) {
+    stopping_ = true;
+    for (std::thread& worker : workers_) worker.join();
+    const double seconds = Ms(start_) / 1e3;
+    *achieved_rate = (ms_[0].size() + ms_[1].size() + failed_) / std::max(1e-9, seconds);
+    *failed = failed_;
+    return ms_;
+  }
+
+ private:
+  void Run(int thread, int threads) {
+    std::mt19937 random(1234 + thread);
+    std::uniform_real_distribution<double> jitter(-0.5, 0.5);
+    const auto period = std::chrono::duration<double>(1.0 / rate_);
+    std::array<std::vector<double>, 2> local;
+    int local_failed = 0;
+    for (long i = thread; !stopping_; i += threads) {
+      const auto due = start_ + std::chrono::duration_cast<Clock::duration>(period * i);
+      std::this_thread::sleep_until(due);
+      const Eigen::Vector3d target = centre_ + Eigen::Vector3d(jitter(random), jitter(random),
+                                                               jitter(random));
+      bool ok = false;
+      if (i % 2 == 0) {
+        v1::IsFreeRequest request;
+        *request.mutable_region() = BoxToProto(target - Eigen::Vector3d::Constant(0.1),
+                                               target + Eigen::Vector3d::Constant(0.1));
+        v1::IsFreeResponse response;
+        ok = client_->IsFree(request, &response).ok();
+      } else {
+        v1::RayCastRequest request;
+        *request.mutable_origin() = Vec3ToProto(camera_);
+        *request.mutable_direction() = Vec3ToProto(Eigen::Vector3d(target - camera_));
+        request.set_max_range(4.0);
+        v1::RayCastResponse response;
+        ok = client_->RayCast(request, &response).ok();
+      }
+      if (ok) {
+        local[i % 2].push_back(std::chrono::duration<double, std::milli>(Clock::now() - due)
+                                   .count());
+      } else {
+        ++local_failed;
+      }
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (int k = 0; k < 2; ++k) ms_[k].insert(ms_[k].end(), local[k].begin(), local[k].end());
+    failed_ += local_failed;
+  }
+
+  MapClient* client_;
+  Eigen::Vector3d camera_, centre_;
+  double rate_;
+  Clock::time_point start_;
+  std::atomic<bool> stopping_{false};
+  std::vector<std::thread> workers_;
+  std::mutex mutex_;
+  std::array<std::vector<double>, 2> ms_;
+  int failed_ = 0;
+};
+
+// Clients that each send the four query kinds of QueryLoad back to back, on connections of
+// their own, until stopped; counts what they got answered.
+class BusyClients {
+ public:
+  BusyClients(const std::string& address, int count, const Eigen::Vector3d& centre) {
+    MapClientOptions options;
+    options.deadline_s = 600.0;
+    for (int c = 0; c < count; ++c) {
+      clients_.push_back(std::make_unique<MapClient>(address, options));
+    }
+    for (int c = 0; c < count; ++c) {
+      workers_.emplace_back([this, c, centre] {
+        QueryLoad load(clients_[c].get(), centre);
+        for (int q = c % kNumQueries; !stopping_; q = (q + 1) % kNumQueries) {
+          if (load.Run(static_cast<Query>(q)) >= 0) ++answered_;
+        }
+      });
+    }
+  }
+  long Stop() {
+    stopping_ = true;
+    for (std::thread& worker : workers_) worker.join();
+    return answered_;
+  }
+
+ private:
+  std::vector<std::unique_ptr<MapClient>> clients_;
+  std::vector<std::thread> workers_;
+  std::atomic<bool> stopping_{false};
+  std::atomic<long> answered_{0};
+};
+
 }  // namespace
 }  // namespace objmap
 
@@ -113,6 +223,9 @@ int main(int argc, char** argv) {
   const std::string path = argc > 1 ? argv[1] : "../shared/data/redkitchen";
   const int wanted_keyframes = argc > 2 ? std::atoi(argv[2]) : 68;
   const int query_rounds = argc > 3 ? std::atoi(argv[3]) : 300;
+  const int fairness_keyframes = argc > 4 ? std::atoi(argv[4]) : 12;
+  const int busy_clients = argc > 5 ? std::atoi(argv[5]) : 50;
+  const double queries_per_s = argc > 6 ? std::atof(argv[6]) : 1000.0;
   std::string why;
 
   // Keyframes as `objmap ingest` selects and encodes them (JPEG colour).
@@ -148,7 +261,9 @@ int main(int argc, char** argv) {
     std::printf("NOTE: no detector model at %s: the map will have no objects\n",
                 detector_config.model_path.c_str());
   }
-  const MapServerConfig server_config;
+  MapServerConfig server_config;
+  if (argc > 7) server_config.fairness.heavy_query_threads = std::atoi(argv[7]);
+  if (argc > 8) server_config.fairness.heavy_query_nice = std::atoi(argv[8]);
   std::unique_ptr<MapServer> map_server =
       MapServer::Open(server_config, db.string(), std::move(detector), &why);
   if (!map_server) {
@@ -169,8 +284,12 @@ int main(int argc, char** argv) {
   client_options.deadline_s = 600.0;
   MapClient client(grpc_service::AddressWithPort(grpc_options.listen_address, port),
                    client_options);
-  std::printf("server_bench: %s, %d keyframes, %d query rounds, database %s\n",
-              reader->Describe().c_str(), num_keyframes, query_rounds, db.c_str());
+  std::printf(
+      "server_bench: %s, %d keyframes, %d query rounds, heavy_query_threads %d, "
+      "heavy_query_nice %d, database %s\n",
+      reader->Describe().c_str(), num_keyframes, query_rounds,
+      server_config.fairness.heavy_query_threads,
+      server_config.fairness.heavy_query_nice, db.c_str());
 
   // Every later keyframe is sent with the correction of the pose updates so far, so that the
   // map stays consistent after each regeneration.
@@ -256,23 +375,83 @@ int main(int argc, char** argv) {
   add_until(num_keyframes);
   ingesting = false;
   query_thread.join();
+
+  // Fairness: keyframes of the second half sent again (the same work each time), alone, under
+  // open-loop planner queries and under busy clients.
+  const std::string address = grpc_service::AddressWithPort(grpc_options.listen_address, port);
+  const Eigen::Vector3d camera = (correction * frames[0].T_W_C).translation();
+  auto send_again = [&]() {
+    std::vector<double> ms;
+    for (int k = 0; k < fairness_keyframes; ++k) {
+      RgbdFrame frame = frames[half + k % std::max(1, num_keyframes - half)];
+      frame.T_W_C = correction * frame.T_W_C;
+      v1::AddKeyframeResponse response;
+      const auto start = Clock::now();
+      const grpc::Status status = client.AddKeyframe(frame, nullptr, &response);
+      if (!status.ok()) {
+        std::fprintf(stderr, "server_bench: fairness keyframe %d: %s\n", k,
+                     DescribeStatus(status).c_str());
+        std::exit(1);
+      }
+      ms.push_back(Ms(start));
+    }
+    return ms;
+  };
+  auto mean = [](const std::vector<double>& values) {
+    double sum = 0.0;
+    for (double value : values) sum += value;
+    return values.empty() ? 0.0 : sum / values.size();
+  };
+  const std::vector<double> alone_ms = send_again();
+  std::vector<double> open_loop_ms;
+  std::array<std::vector<double>, 2> open_loop_latency;
+  double open_loop_rate = 0.0;
+  int open_loop_failed = 0;
+  {
+    OpenLoopQueries open_loop(&client, camera, centre, queries_per_s, 8);
+    open_loop_ms = send_again();
+    open_loop_latency = open_loop.Stop(&open_loop_rate, &open_loop_failed);
+  }
+  std::vector<double> busy_ms;
+  long busy_answered = 0;
+  const auto busy_start = Clock::now();
+  {
+    BusyClients busy(address, busy_clients, centre);
+    busy_ms = send_again();
+    busy_answered = busy.Stop();
+  }
+  const double busy_s = Ms(busy_start) / 1e3;
   regenerate_all();
 
-  // Bytes per keyframe, read through a second connection to the same file.
-  std::unique_ptr<KeyframeStore> store =
-      KeyframeStore::Open(db.string(), KeyframeStoreConfig{}, &why);
-  KeyframeStore::KeyframeBytes sum;
-  for (KeyframeId id = 1; id <= num_keyframes && store; ++id) {
-    const KeyframeStore::KeyframeBytes bytes = store->BytesOf(id);
-    sum.depth += bytes.depth, sum.mask += bytes.mask, sum.color += bytes.color;
-    sum.observations += bytes.observations, sum.total += bytes.total;
-  }
   const ServerStatus status = map_server->Status();
 
   PrintLatencies("Queries, server idle (map of half the keyframes):", &idle);
   PrintLatencies("Queries while the second half is ingested (one query client):", &loaded);
   if (failed > 0) std::printf("FAILED queries during ingest: %d\n", failed.load());
   const std::vector<double> loaded_acks(ack_ms.begin() + acks_before, ack_ms.end());
+  std::printf(
+      "\nFairness: %d keyframes sent again, AddKeyframe acknowledgement\n"
+      "| load | mean ms | p99 ms | vs alone |\n|---|---|---|---|\n"
+      "| none | %.0f | %.0f | 1.00x |\n"
+      "| %.0f IsFree + RayCast a second (achieved %.0f/s, 8 threads, open loop) | %.0f | %.0f | "
+      "%.2fx |\n"
+      "| %d clients querying back to back (%ld answers, %.0f/s) | %.0f | %.0f | %.2fx |\n",
+      fairness_keyframes, mean(alone_ms), Percentile(alone_ms, 0.99), queries_per_s,
+      open_loop_rate, mean(open_loop_ms), Percentile(open_loop_ms, 0.99),
+      mean(open_loop_ms) / std::max(1e-9, mean(alone_ms)), busy_clients, busy_answered,
+      busy_answered / std::max(1e-9, busy_s), mean(busy_ms), Percentile(busy_ms, 0.99),
+      mean(busy_ms) / std::max(1e-9, mean(alone_ms)));
+  std::printf(
+      "\nOpen-loop queries during that ingest (latency from when each was due)\n"
+      "| query | n | p50 ms | p99 ms | p99.9 ms | max ms |\n|---|---|---|---|---|---|\n");
+  const char* const open_loop_names[2] = {"IsFree (20 cm box)", "RayCast (to 4 m)"};
+  for (int k = 0; k < 2; ++k) {
+    std::printf("| %s | %zu | %.2f | %.2f | %.2f | %.2f |\n", open_loop_names[k],
+                open_loop_latency[k].size(), Percentile(open_loop_latency[k], 0.5),
+                Percentile(open_loop_latency[k], 0.99), Percentile(open_loop_latency[k], 0.999),
+                Percentile(open_loop_latency[k], 1.0));
+  }
+  if (open_loop_failed > 0) std::printf("FAILED open-loop queries: %d\n", open_loop_failed);
   std::printf(
       "\nAddKeyframe acknowledgement (detector, mapping, store commit): p50 %.0f ms, "
       "p99 %.0f ms over %zu keyframes\n",
@@ -283,6 +462,29 @@ int main(int argc, char** argv) {
   for (const RegenerationPoint& point : regenerations) {
     std::printf("| %d | %.0f | %.0f |\n", point.keyframes, point.ms, point.ms / point.keyframes);
   }
+  std::printf("map: %zu keyframes, %zu objects (%zu confirmed), version %llu\n", status.keyframes,
+              status.objects, status.confirmed_objects,
+              static_cast<unsigned long long>(status.map_version));
+
+  // Restart: the map rebuilt from the file, with the OctoMap checkpoint the shutdown saved, and,
+  // as the baseline, from a copy without it (every keyframe integrated again).
+  grpc_server->Shutdown();
+  map_server.reset();
+  // Bytes per keyframe, read from the file once the server has let go of it (one writer per
+  // database).
+  std::unique_ptr<KeyframeStore> store =
+      KeyframeStore::Open(db.string(), KeyframeStoreConfig{}, &why);
+  if (!store) {
+    std::fprintf(stderr, "server_bench: %s\n", why.c_str());
+    return 1;
+  }
+  KeyframeStore::KeyframeBytes sum;
+  for (KeyframeId id = 1; id <= num_keyframes; ++id) {
+    const KeyframeStore::KeyframeBytes bytes = store->BytesOf(id);
+    sum.depth += bytes.depth, sum.mask += bytes.mask, sum.color += bytes.color;
+    sum.observations += bytes.observations, sum.total += bytes.total;
+  }
+  store.reset();
   const double n = std::max(1, num_keyframes);
   std::printf(
       "\nStored per keyframe (mean of %d): depth PNG %.0f kB, object mask PNG %.0f kB, "
@@ -297,15 +499,6 @@ int main(int argc, char** argv) {
               ignored ? 0.0 : wal_bytes / 1e6,
               static_cast<unsigned long long>(status.checkpoint_version),
               status.last_checkpoint_ms);
-  std::printf("map: %zu keyframes, %zu objects (%zu confirmed), version %llu\n", status.keyframes,
-              status.objects, status.confirmed_objects,
-              static_cast<unsigned long long>(status.map_version));
-
-  // Restart: the map rebuilt from the file, with the OctoMap checkpoint the shutdown saved, and,
-  // as the baseline, from a copy without it (every keyframe integrated again).
-  grpc_server->Shutdown();
-  store.reset();
-  map_server.reset();
   const fs::path baseline_db = db.string() + ".baseline";
   fs::copy_file(db, baseline_db, fs::copy_options::overwrite_existing);
   std::uint64_t checkpoint_bytes = 0;

@@ -8,12 +8,21 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <atomic>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <future>
 #include <thread>
+#include <vector>
 
 #include "grpc_service/grpc_server.h"
 #include "objmap/client.h"
+#include "objmap/conversions.h"
 #include "objmap/keyframe_request.h"
 #include "test_scenes.h"
 #include "types/coco_classes.h"
@@ -45,8 +54,7 @@ class MapServiceTest : public ::testing::Test {
   void Start(int max_message_mb, GrpcServerOptions options = GrpcServerOptions(),
              std::optional<AccessTokens> tokens = std::nullopt) {
     std::string why;
-    const MapServerConfig server_config;
-    map_server_ = MapServer::Open(server_config, db_path_, nullptr, &why);
+    map_server_ = MapServer::Open(server_config_, db_path_, nullptr, &why);
     ASSERT_TRUE(map_server_) << why;
     service_ = std::make_unique<MapServiceImpl>(*map_server_);
     if (tokens) service_->RequireTokens(*tokens);
@@ -98,6 +106,7 @@ class MapServiceTest : public ::testing::Test {
   }
 
   std::string db_path_;
+  MapServerConfig server_config_;
   int port_ = 0;
   CameraIntrinsics K_;
   std::unique_ptr<MapServer> map_server_;
@@ -158,6 +167,100 @@ TEST_F(MapServiceTest, AThingNoDetectionNamesIsQueryableAsUnknownAndOutOfTheInve
   v1::InventoryResponse inventory;
   ASSERT_TRUE(stub_->Inventory(&inventory_context, inventory_request, &inventory).ok());
   for (const auto& entry : inventory.entries()) EXPECT_NE(entry.class_name(), "unknown");
+}
+
+// Names and nice values of this process's threads (/proc/self/task/*/comm and stat).
+std::vector<std::pair<std::string, int>> ProcessThreads() {
+  std::vector<std::pair<std::string, int>> threads;
+  for (const auto& task : std::filesystem::directory_iterator("/proc/self/task")) {
+    std::ifstream comm(task.path() / "comm");
+    std::string name;
+    std::getline(comm, name);
+    std::ifstream stat(task.path() / "stat");
+    std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
+    // Fields after the parenthesised name: state is field 3, nice field 19.
+    std::istringstream fields(text.substr(text.rfind(')') + 2));
+    std::string field;
+    int nice = 0;
+    for (int index = 3; fields >> field; ++index) {
+      if (index == 19) {
+        nice = std::stoi(field);
+        break;
+      }
+    }
+    threads.emplace_back(name, nice);
+  }
+  return threads;
+}
+
+TEST_F(MapServiceTest, HeavyQueriesRunOnANicerThreadAndAreRefusedWhenTooManyWait) {
+  Stop();
+  RemoveDatabase();
+  server_config_.fairness.heavy_query_threads = 1;
+  server_config_.fairness.heavy_query_nice = 7;
+  server_config_.fairness.max_waiting_heavy_queries = 0;
+  Start(64);
+  for (int view = 0; view < 2; ++view) {
+    v1::AddKeyframeResponse added;
+    ASSERT_TRUE(Add(Keyframe(view), &added).ok());
+  }
+  v1::QueryOccupancyRequest heavy;
+  *heavy.mutable_region() = BoxToProto(Eigen::Vector3d(-1.2, -1.2, 0.0),
+                                       Eigen::Vector3d(1.2, 1.2, 1.4));
+  heavy.set_include_voxels(true);
+  v1::IsFreeRequest light;
+  *light.mutable_region() =
+      BoxToProto(Eigen::Vector3d(-0.1, -0.1, 1.0), Eigen::Vector3d(0.1, 0.1, 1.2));
+  // Bursts of simultaneous heavy and light queries: with one heavy thread and no place to wait,
+  // a heavy query that finds the thread busy is refused at once; light ones never are.
+  int refused = 0, heavy_answered = 0;
+  for (int round = 0; round < 40 && refused == 0; ++round) {
+    std::promise<void> go;
+    std::shared_future<void> start = go.get_future().share();
+    std::vector<std::future<grpc::Status>> heavy_calls, light_calls;
+    for (int c = 0; c < 12; ++c) {
+      heavy_calls.push_back(std::async(std::launch::async, [&] {
+        start.wait();
+        grpc::ClientContext context;
+        v1::QueryOccupancyResponse response;
+        return stub_->QueryOccupancy(&context, heavy, &response);
+      }));
+      light_calls.push_back(std::async(std::launch::async, [&] {
+        start.wait();
+        grpc::ClientContext context;
+        v1::IsFreeResponse response;
+        return stub_->IsFree(&context, light, &response);
+      }));
+    }
+    go.set_value();
+    for (auto& call : heavy_calls) {
+      const grpc::Status status = call.get();
+      if (status.ok()) {
+        ++heavy_answered;
+        continue;
+      }
+      ASSERT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED)
+          << status.error_message();
+      EXPECT_NE(status.error_message().find("server.max_waiting_heavy_queries"),
+                std::string::npos)
+          << status.error_message();
+      ++refused;
+    }
+    for (auto& call : light_calls) {
+      const grpc::Status status = call.get();
+      EXPECT_TRUE(status.ok()) << status.error_message();
+    }
+  }
+  EXPECT_GT(refused, 0) << "no heavy query found the heavy thread busy";
+  EXPECT_GT(heavy_answered, 0);
+  // The heavy-query thread runs 7 nicer than this one (which opened the server).
+  const int own_nice = getpriority(PRIO_PROCESS, 0);
+  const auto threads = ProcessThreads();
+  const auto heavy_thread =
+      std::find_if(threads.begin(), threads.end(),
+                   [](const auto& thread) { return thread.first == "objmap-heavy"; });
+  ASSERT_NE(heavy_thread, threads.end());
+  EXPECT_EQ(heavy_thread->second, std::min(19, own_nice + 7));
 }
 
 TEST_F(MapServiceTest, BadRequestsGetTheirCodeAndNameTheField) {

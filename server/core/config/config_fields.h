@@ -25,6 +25,7 @@ void VisitMapper(MapperConfig* m, Visitor& v) {
   v("whole_classes", &m->whole_classes);
   v("part_inside_fraction", &m->part_inside_fraction);
   v("min_whole_to_part_area", &m->min_whole_to_part_area);
+  v("occupancy_second_copy", &m->occupancy_second_copy);
   SegmenterConfig& s = m->segmenter;
   v.Section("segmenter");
   v("depth_jump_ratio", &s.depth_jump_ratio);
@@ -132,6 +133,9 @@ void VisitObjmapConfig(ObjmapConfig* c, Visitor& v) {
   v("max_detections_per_keyframe", &s.limits.max_detections_per_keyframe);
   v("max_poses_per_update", &s.limits.max_poses_per_update);
   v("max_string_bytes", &s.limits.max_string_bytes);
+  v("heavy_query_threads", &s.fairness.heavy_query_threads);
+  v("heavy_query_nice", &s.fairness.heavy_query_nice);
+  v("max_waiting_heavy_queries", &s.fairness.max_waiting_heavy_queries);
   v.Section("store");
   v("color_jpeg_quality", &s.store.color_jpeg_quality);
   v("busy_timeout_ms", &s.store.busy_timeout_ms);

@@ -57,7 +57,10 @@ StoreChange AllObjectsChange(const Mapper& mapper) {
 }  // namespace
 
 bool MapServerConfig::IsValid(std::string* why) const {
-  if (!mapper.IsValid(why) || !store.IsValid(why) || !limits.IsValid(why)) return false;
+  if (!mapper.IsValid(why) || !store.IsValid(why) || !limits.IsValid(why) ||
+      !fairness.IsValid(why)) {
+    return false;
+  }
   if (max_queue < 1 || change_history < 1 || max_listed_voxels < 1) {
     *why = "MapServerConfig: max_queue, change_history and max_listed_voxels must be >= 1";
     return false;
@@ -107,6 +110,19 @@ std::unique_ptr<MapServer> MapServer::Open(const MapServerConfig& config,
   impl.history_start = version;
   impl.snapshot = impl.snapshot_builder.Build(*impl.mapper, version, nullptr);
   impl.detector = std::move(detector);
+  // One thread of the server's own runs the detector (detectors are not thread-safe), at the
+  // priority of the mapping thread: detection is part of the writes.
+  if (impl.detector) {
+    TaskThreads::Options detection;
+    detection.name = "objmap-detect";
+    impl.detector_thread = std::make_unique<TaskThreads>(detection);
+  }
+  TaskThreads::Options heavy;
+  heavy.threads = config.fairness.heavy_query_threads;
+  heavy.nice = config.fairness.heavy_query_nice;
+  heavy.max_waiting = config.fairness.max_waiting_heavy_queries;
+  heavy.name = "objmap-heavy";
+  impl.heavy_query_threads = std::make_unique<TaskThreads>(heavy);
   // What this start had to integrate, the next one loads.
   impl.MaybeCheckpoint(/*force=*/true);
   impl.startup_ms = MillisecondsSince(start);
@@ -355,10 +371,11 @@ ServiceStatus MapServer::AddKeyframe(RgbdFrame frame,
   if (detections) {
     job->detections = std::move(*detections);
   } else if (impl_->detector) {
-    std::lock_guard<std::mutex> lock(impl_->detector_mutex);
-    if (!impl_->detector->Detect(frame, &job->detections, &why)) {
-      return ServiceStatus::Invalid("detector: " + why);
-    }
+    bool detected = false;
+    // Unbounded: the request threads bound how many wait.
+    (void)impl_->detector_thread->Run(
+        [&] { detected = impl_->detector->Detect(frame, &job->detections, &why); });
+    if (!detected) return ServiceStatus::Invalid("detector: " + why);
   }
   job->frame = std::move(frame);
   const std::shared_future<MapJob::Result> done = job->result;

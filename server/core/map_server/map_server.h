@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "detection/detector.h"
+#include "map_server/fairness.h"
 #include "map_server/request_limits.h"
 #include "mapper/mapper.h"
 #include "objects/voxel_model.h"
@@ -66,6 +67,8 @@ struct MapServerConfig {
   double checkpoint_work_ratio = 10.0;
   /// What one request may ask (config section server: max_image_pixels, ...).
   RequestLimits limits;
+  /// How writes and queries share the CPU (config section server: heavy_query_threads, ...).
+  FairnessConfig fairness;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };

@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "map_server/map_server.h"
+#include "map_server/task_threads.h"
 #include "map_server/snapshot_builder.h"
 
 namespace objmap {
@@ -43,7 +44,8 @@ struct MapServer::Impl {
   std::chrono::steady_clock::time_point started = std::chrono::steady_clock::now();
 
   std::unique_ptr<Detector> detector;
-  std::mutex detector_mutex;  // detectors are not thread-safe
+  std::unique_ptr<TaskThreads> detector_thread;  // the one thread that runs the detector
+  std::unique_ptr<TaskThreads> heavy_query_threads;  // FairnessConfig
 
   // Queue of writes.
   mutable std::mutex queue_mutex;
@@ -97,6 +99,13 @@ struct MapServer::Impl {
   /// Enqueue with queue_mutex already held by the caller.
   ServiceStatus EnqueueLocked(std::shared_ptr<MapJob> job, bool bounded);
   [[nodiscard]] std::shared_ptr<const MapSnapshot> Current() const;
+  /// Runs `query` on a heavy-query thread (FairnessConfig); kResourceExhausted when too many
+  /// wait already.
+  ServiceStatus RunHeavy(const std::function<ServiceStatus()>& query) const;
+  /// QueryOccupancy on the calling thread (IsFree's small boxes are not heavy queries).
+  ServiceStatus ReadRegion(const Eigen::Vector3d& min_W, const Eigen::Vector3d& max_W,
+                           double resolution_m, bool list_voxels, std::size_t max_voxels,
+                           RegionOccupancy* region, std::uint64_t* version) const;
 };
 
 }  // namespace objmap

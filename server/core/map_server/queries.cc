@@ -1,5 +1,6 @@
-// The read side of MapServer: every query reads one snapshot (objects) or the OctoMap under a
-// shared lock, so none waits for a regeneration.
+// The read side of MapServer: every query reads one snapshot (objects) or the published OctoMap
+// (Mapper::ReadOccupancy), so none waits for a keyframe or a regeneration. Heavy queries
+// (QueryOccupancy, GetOctomap) run on the heavy-query threads (FairnessConfig).
 #include <algorithm>
 #include <cmath>
 
@@ -144,25 +145,46 @@ ServiceStatus MapServer::Inventory(std::optional<std::uint64_t> since_version,
   return ServiceStatus::Ok();
 }
 
+ServiceStatus MapServer::Impl::RunHeavy(const std::function<ServiceStatus()>& query) const {
+  ServiceStatus status;
+  if (!heavy_query_threads->Run([&] { status = query(); })) {
+    return {StatusCode::kResourceExhausted,
+            "busy: " + std::to_string(config.fairness.max_waiting_heavy_queries) +
+                " heavy queries (QueryOccupancy, GetOctomap) already wait "
+                "(server.max_waiting_heavy_queries); retry later"};
+  }
+  return status;
+}
+
 ServiceStatus MapServer::QueryOccupancy(const Eigen::Vector3d& min_W, const Eigen::Vector3d& max_W,
                                         double resolution_m, bool list_voxels,
                                         std::size_t max_voxels, RegionOccupancy* region,
                                         std::uint64_t* version) const {
+  return impl_->RunHeavy([&] {
+    return impl_->ReadRegion(min_W, max_W, resolution_m, list_voxels, max_voxels, region,
+                             version);
+  });
+}
+
+ServiceStatus MapServer::Impl::ReadRegion(const Eigen::Vector3d& min_W,
+                                          const Eigen::Vector3d& max_W, double resolution_m,
+                                          bool list_voxels, std::size_t max_voxels,
+                                          RegionOccupancy* region, std::uint64_t* version) const {
   std::string why;
   if (!ValidateBox(min_W, max_W, "region", &why)) return ServiceStatus::Invalid(why);
   if (!std::isfinite(resolution_m) || resolution_m < 0.0) {
     return ServiceStatus::Invalid("resolution must be finite and >= 0");
   }
   const double volume = (max_W - min_W).prod();
-  if (volume > impl_->config.max_query_volume_m3) {
+  if (volume > config.max_query_volume_m3) {
     return ServiceStatus::Invalid("region volume " + std::to_string(volume) + " m^3 exceeds " +
-                                  std::to_string(impl_->config.max_query_volume_m3));
+                                  std::to_string(config.max_query_volume_m3));
   }
   const std::size_t limit = std::min<std::size_t>(
-      max_voxels == 0 ? impl_->config.max_listed_voxels : max_voxels,
-      impl_->config.max_listed_voxels);
-  *version = impl_->Current()->version;
-  impl_->mapper->ReadOccupancy([&](const OccupancyMap& map) {
+      max_voxels == 0 ? config.max_listed_voxels : max_voxels,
+      config.max_listed_voxels);
+  *version = Current()->version;
+  mapper->ReadOccupancy([&](const OccupancyMap& map) {
     *region = map.QueryRegion(min_W, max_W, resolution_m, list_voxels ? limit : 0);
   });
   return ServiceStatus::Ok();
@@ -175,7 +197,7 @@ ServiceStatus MapServer::IsFree(const Eigen::Vector3d& min_W, const Eigen::Vecto
   // Objects from one snapshot; the OctoMap is read live, so the version reported (read by
   // QueryOccupancy) is that snapshot's or a newer one.
   const std::shared_ptr<const MapSnapshot> snapshot = impl_->Current();
-  ServiceStatus status = QueryOccupancy(min_W, max_W, 0.0, false, 0, counts, version);
+  ServiceStatus status = impl_->ReadRegion(min_W, max_W, 0.0, false, 0, counts, version);
   if (!status.ok()) return status;
   std::vector<ObjectId> inside;
   for (const auto& [id, view] : snapshot->objects) {
@@ -265,13 +287,15 @@ ServiceStatus MapServer::OctomapBytes(
   if (region && !ValidateBox(region->first, region->second, "region", &why)) {
     return ServiceStatus::Invalid(why);
   }
-  const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
-  *version = impl_->Current()->version;
-  impl_->mapper->ReadOccupancy([&](const OccupancyMap& map) {
-    *bytes = map.BinaryBytes(region.has_value(), region ? region->first : zero,
-                             region ? region->second : zero, leaf_count);
+  return impl_->RunHeavy([&] {
+    const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
+    *version = impl_->Current()->version;
+    impl_->mapper->ReadOccupancy([&](const OccupancyMap& map) {
+      *bytes = map.BinaryBytes(region.has_value(), region ? region->first : zero,
+                               region ? region->second : zero, leaf_count);
+    });
+    return ServiceStatus::Ok();
   });
-  return ServiceStatus::Ok();
 }
 
 ServiceStatus MapServer::OccupiedCenters(std::size_t max_count,

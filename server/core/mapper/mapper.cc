@@ -9,10 +9,10 @@
 #include <mutex>
 #include <optional>
 #include <set>
-#include <shared_mutex>
 #include <sstream>
 
 #include "mapper/keyframe_segments.h"
+#include "occupancy/shared_occupancy_map.h"
 #include "segmentation/segment_index.h"
 #include "types/organized_cloud.h"
 #include "types/rounding.h"
@@ -257,15 +257,14 @@ struct Mapper::Impl {
         segmenter(c.segmenter),
         associator(c.association),
         objects(c.objects),
-        occupancy(std::make_unique<OccupancyMap>(c.occupancy)) {}
+        occupancy(c.occupancy, c.occupancy_second_copy) {}
 
   MapperConfig config;
   Segmenter segmenter;
   Associator associator;
   ObjectMap objects;
-  // Swapped whole after a regeneration; guarded by occupancy_mutex against ReadOccupancy.
-  std::unique_ptr<OccupancyMap> occupancy;
-  mutable std::shared_mutex occupancy_mutex;
+  // Written here, read by ReadOccupancy on any thread.
+  SharedOccupancyMap occupancy;
   std::map<KeyframeId, KeyframeRecord> keyframes;
   KeyframeId next_keyframe_id = 1;
 
@@ -455,27 +454,26 @@ bool Mapper::Impl::RestoreOccupancy(const OccupancyCheckpoint& checkpoint, int* 
       return false;
     }
   }
-  auto restored = std::make_unique<OccupancyMap>(config.occupancy);
-  if (!restored->ReadState(checkpoint.state, why)) return false;
-  *integrated = 0;
-  for (auto it = keyframes.upper_bound(last); it != keyframes.end(); ++it, ++*integrated) {
-    restored->Integrate(DepthScanOf(it->second));
-  }
-  std::unique_lock<std::shared_mutex> lock(occupancy_mutex);
-  occupancy.swap(restored);
-  return true;
+  return occupancy.Rewrite([&](OccupancyMap* map) {
+    if (!map->ReadState(checkpoint.state, why)) return false;
+    *integrated = 0;
+    for (auto it = keyframes.upper_bound(last); it != keyframes.end(); ++it, ++*integrated) {
+      map->Integrate(DepthScanOf(it->second));
+    }
+    return true;
+  });
 }
 
-// Built off to the side so readers keep the previous map until the swap.
 void Mapper::Impl::RebuildOccupancy() {
   std::vector<const KeyframeRecord*> records;
   for (const auto& [id, record] : keyframes) records.push_back(&record);
-  auto rebuilt = std::make_unique<OccupancyMap>(config.occupancy);
-  rebuilt->IntegrateSequence(
-      records.size(), [&records](std::size_t i) { return DepthScanOf(*records[i]); },
-      config.regeneration.threads);
-  std::unique_lock<std::shared_mutex> lock(occupancy_mutex);
-  occupancy.swap(rebuilt);
+  occupancy.Rewrite([&](OccupancyMap* map) {
+    map->Clear();
+    map->IntegrateSequence(
+        records.size(), [&records](std::size_t i) { return DepthScanOf(*records[i]); },
+        config.regeneration.threads);
+    return true;
+  });
 }
 
 const Eigen::AlignedBox3d& Mapper::Impl::ReachOf(KeyframeId id) {
@@ -517,14 +515,15 @@ void Mapper::Impl::RegenerateOccupancy(const std::map<KeyframeId, Eigen::Isometr
       reaching.push_back(&record);
     }
   }
-  auto updated = std::make_unique<OccupancyMap>(occupancy->Clone());
-  updated->RegenerateWhereReached(
-      changed, reaching.size(), [&reaching](std::size_t i) { return DepthScanOf(*reaching[i]); },
-      config.regeneration.threads);
+  occupancy.Rewrite([&](OccupancyMap* map) {
+    map->RegenerateWhereReached(
+        changed, reaching.size(),
+        [&reaching](std::size_t i) { return DepthScanOf(*reaching[i]); },
+        config.regeneration.threads);
+    return true;
+  });
   report->occupancy_incremental = true;
   report->keyframes_reintegrated = static_cast<int>(reaching.size());
-  std::unique_lock<std::shared_mutex> lock(occupancy_mutex);
-  occupancy.swap(updated);
 }
 
 Mapper::Mapper(const MapperConfig& config) : impl_(std::make_unique<Impl>(config)) {
@@ -569,13 +568,7 @@ bool Mapper::AddKeyframe(const RgbdFrame& frame, const std::vector<Detection>& d
   result->timings.association_ms = MillisecondsSince(start);
 
   start = Clock::now();
-  // Rays are cast without the lock (readers only read the OcTree); only writing the OcTree
-  // excludes them, so an occupancy query waits at most for that last step.
-  impl_->occupancy->PrepareScan(DepthScanOf(record));
-  {
-    std::unique_lock<std::shared_mutex> lock(impl_->occupancy_mutex);
-    impl_->occupancy->ApplyPreparedScan();
-  }
+  impl_->occupancy.Integrate(DepthScanOf(record));
   impl_->keyframes.emplace(result->keyframe_id, std::move(record));
   result->timings.occupancy_ms = MillisecondsSince(start);
   return true;
@@ -659,7 +652,7 @@ RestoreOutcome Mapper::Restore(std::map<KeyframeId, KeyframeRecord> keyframes,
 
 OccupancyCheckpoint Mapper::MakeOccupancyCheckpoint() const {
   OccupancyCheckpoint checkpoint;
-  checkpoint.state = impl_->occupancy->WriteState();
+  checkpoint.state = impl_->occupancy.latest().WriteState();
   for (const auto& [id, record] : impl_->keyframes) checkpoint.keyframe_poses[id] = record.T_W_C;
   return checkpoint;
 }
@@ -670,8 +663,7 @@ const KeyframeRecord* Mapper::FindKeyframe(KeyframeId id) const {
 }
 
 void Mapper::ReadOccupancy(const std::function<void(const OccupancyMap&)>& read) const {
-  std::shared_lock<std::shared_mutex> lock(impl_->occupancy_mutex);
-  read(*impl_->occupancy);
+  impl_->occupancy.Read(read);
 }
 
 ObjectEvidence Mapper::Evidence(const MapObject& object) const {
@@ -730,7 +722,7 @@ std::vector<InventoryEntry> Mapper::Inventory() const {
 }
 
 const ObjectMap& Mapper::objects() const { return impl_->objects; }
-const OccupancyMap& Mapper::occupancy() const { return *impl_->occupancy; }
+const OccupancyMap& Mapper::occupancy() const { return impl_->occupancy.latest(); }
 std::size_t Mapper::num_keyframes() const { return impl_->keyframes.size(); }
 const MapperConfig& Mapper::config() const { return impl_->config; }
 

@@ -90,6 +90,11 @@ struct MapperConfig {
   ReassociationConfig reassociation;
   RegenerationConfig regeneration;
   UnknownObjectConfig unknown_objects;
+  /// Keep a second copy of the OctoMap so that ReadOccupancy() on other threads never waits for
+  /// the writer (SharedOccupancyMap): for a mapper that is queried while it maps (the server,
+  /// the ROS node). Off (a mapper read only between writes, as in `objmap map`): half the
+  /// OctoMap memory, and ReadOccupancy() waits while the OcTree is written or rebuilt.
+  bool occupancy_second_copy = true;
   /// Detections scoring lower are ignored.
   float min_detection_score = 0.15f;
   /// Segments with fewer points after model downsampling are dropped (too small to model).
@@ -223,9 +228,9 @@ struct RestoreOutcome {
 /// The facade of the core: keyframes in, objects and occupancy out (paper Fig. 3).
 /// Thread-safety: the writers (AddKeyframe, UpdatePoses, Restore) and every other method must be
 /// called from one thread at a time, except ReadOccupancy, which may run on any thread at any
-/// time: a keyframe's rays are cast without a lock and only the OcTree update that follows
-/// (tens of milliseconds) takes an exclusive one, and regeneration
-/// builds the new OctoMap off to the side and swaps it in, so readers never wait for it.
+/// time. With MapperConfig::occupancy_second_copy it never waits for the writer: keyframes and
+/// regenerations are written into a copy that readers do not see, which is then published
+/// (SharedOccupancyMap).
 class Mapper {
  public:
   /// `config` must satisfy IsValid(); an invalid config is a programming error.
@@ -269,7 +274,8 @@ class Mapper {
   /// The stored record of a keyframe, or nullptr.
   [[nodiscard]] const KeyframeRecord* FindKeyframe(KeyframeId id) const;
 
-  /// Runs `read` on the OctoMap under a shared lock (safe from any thread, see the class note).
+  /// Runs `read` on the latest published OctoMap, which does not change meanwhile (safe from any
+  /// thread, see the class note).
   void ReadOccupancy(const std::function<void(const OccupancyMap&)>& read) const;
 
   /// The object's existence evidence from every keyframe that could see it (InventoryConfig).

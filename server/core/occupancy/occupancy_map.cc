@@ -95,6 +95,15 @@ void OccupancyMap::PrepareScan(const DepthScanW& scan) {
 
 void OccupancyMap::ApplyPreparedScan() { impl_->Apply(&impl_->preparer); }
 
+void OccupancyMap::ApplyScanPreparedBy(const OccupancyMap& source) {
+  const occupancy_internal::ScanPreparer& prepared = source.impl_->preparer;
+  impl_->stats = prepared.stats();
+  if (!prepared.holds_scan()) return;
+  const Clock::time_point update_start = Clock::now();
+  impl_->tree.ApplyScan(prepared.free_space(), prepared.occupied());
+  impl_->stats.tree_update_ms = MsSince(update_start);
+}
+
 const IntegrationStats& OccupancyMap::last_stats() const { return impl_->stats; }
 
 namespace {

@@ -138,6 +138,10 @@ class OccupancyMap {
   /// first step). A second PrepareScan() before the apply replaces the first.
   void PrepareScan(const ScanW& scan);
   void ApplyPreparedScan();
+  /// Writes the scan that `source`'s last PrepareScan() prepared (applied there or not) into
+  /// this map: a copy kept equal to `source` takes each scan without casting its rays again.
+  /// last_stats(): the scan's, with this map's tree_update_ms.
+  void ApplyScanPreparedBy(const OccupancyMap& source);
 
   /// The same for a depth image, an order of magnitude faster: free space is decided for whole
   /// octree blocks from the image (a block that every pixel ray it projects to passes through

@@ -213,6 +213,7 @@ void ScanPreparer::Prepare(const ScanW& scan) { PrepareRayByRay(scan, nullptr); 
 void ScanPreparer::PrepareRayByRay(const ScanW& scan, const FreeSpaceGrid* region) {
   stats_ = IntegrationStats{};
   ready_ = false;
+  applied_ = false;
   VoxelKey origin_key;
   // Like OctoMap, an origin outside the key range casts no rays and marks nothing.
   if (!AllFinite(scan.origin_W) || !PointToKey(scan.origin_W, config_.resolution_m, &origin_key)) {
@@ -232,6 +233,7 @@ void ScanPreparer::Prepare(const DepthScanW& scan, const FreeSpaceGrid* region) 
   }
   stats_ = IntegrationStats{};
   ready_ = false;
+  applied_ = false;
   const Clock::time_point start = Clock::now();
   carver_.KeyBox(&min_key_, &max_key_);
   grid_.Reset(min_key_, max_key_);

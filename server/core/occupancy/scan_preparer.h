@@ -37,8 +37,11 @@ class ScanPreparer {
   void MarkReach(const DepthScanW& scan, int block_log2, FreeSpaceGrid* region);
 
   /// A scan is prepared (and not yet applied).
-  [[nodiscard]] bool ready() const { return ready_; }
-  void MarkApplied() { ready_ = false; }
+  [[nodiscard]] bool ready() const { return ready_ && !applied_; }
+  void MarkApplied() { applied_ = true; }
+  /// The last Prepare() left updates to apply, applied since or not: they stay until the next
+  /// Prepare(), so that a copy of the map can take them too.
+  [[nodiscard]] bool holds_scan() const { return ready_; }
   [[nodiscard]] const FreeSpaceGrid& free_space() const { return grid_; }
   /// Morton codes, sorted and distinct; none of them is set in free_space().
   [[nodiscard]] const std::vector<std::uint64_t>& occupied() const { return occupied_keys_; }
@@ -72,7 +75,8 @@ class ScanPreparer {
   FreeSpaceGrid grid_;
   ProjectiveCarver carver_;
   IntegrationStats stats_;
-  bool ready_ = false;
+  bool ready_ = false;    // the last Prepare() finished with updates
+  bool applied_ = false;  // and they were applied
   // Scratch, kept between scans to avoid reallocations.
   std::vector<Eigen::Vector3f> ray_ends_W_;
   std::vector<std::uint64_t> occupied_keys_;
