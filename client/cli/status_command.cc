@@ -40,6 +40,15 @@ std::string Startup(const v1::StatusResponse& status) {
   return text;
 }
 
+std::string OctomapMemory(const v1::StatusResponse& status) {
+  char text[96];
+  std::snprintf(text, sizeof(text), "%.1f MiB in memory, %s",
+                static_cast<double>(status.occupancy_bytes()) / (1024.0 * 1024.0),
+                status.occupancy_copies() == 2 ? "kept twice (queries never wait for writes)"
+                                               : "one copy");
+  return text;
+}
+
 std::string Duration(double seconds) {
   const long long total = static_cast<long long>(seconds);
   char text[64];
@@ -74,6 +83,7 @@ int RunStatusCommand(int argc, char** argv) {
             << "ingest queue:  " << status.ingest_queue() << "\n"
             << "regeneration:  " << Regeneration(status) << "\n"
             << "database:      " << status.database() << " (" << database_mib << ")\n"
+            << "octomap:       " << OctomapMemory(status) << "\n"
             << "checkpoint:    " << Checkpoint(status) << "\n"
             << "startup:       " << Startup(status) << "\n"
             << "uptime:        " << Duration(status.uptime_s()) << "\n";

@@ -296,6 +296,8 @@ grpc::Status MapServiceImpl::Status(grpc::ServerContext* /*context*/,
     response->set_last_checkpoint_ms(status.last_checkpoint_ms);
     response->set_startup_ms(status.startup_ms);
     response->set_startup_keyframes_integrated(status.startup_keyframes_integrated);
+    response->set_occupancy_bytes(status.occupancy_bytes);
+    response->set_occupancy_copies(status.occupancy_copies);
     return grpc::Status::OK;
   });
 }

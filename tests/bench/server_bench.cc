@@ -462,9 +462,12 @@ int main(int argc, char** argv) {
   for (const RegenerationPoint& point : regenerations) {
     std::printf("| %d | %.0f | %.0f |\n", point.keyframes, point.ms, point.ms / point.keyframes);
   }
-  std::printf("map: %zu keyframes, %zu objects (%zu confirmed), version %llu\n", status.keyframes,
-              status.objects, status.confirmed_objects,
-              static_cast<unsigned long long>(status.map_version));
+  std::printf(
+      "map: %zu keyframes, %zu objects (%zu confirmed), version %llu; OctoMap %.1f MB in memory, "
+      "kept %d times\n",
+      status.keyframes, status.objects, status.confirmed_objects,
+      static_cast<unsigned long long>(status.map_version), status.occupancy_bytes / 1e6,
+      status.occupancy_copies);
 
   // Restart: the map rebuilt from the file, with the OctoMap checkpoint the shutdown saved, and,
   // as the baseline, from a copy without it (every keyframe integrated again).

@@ -253,6 +253,11 @@ TEST_F(MapServiceTest, HeavyQueriesRunOnANicerThreadAndAreRefusedWhenTooManyWait
   }
   EXPECT_GT(refused, 0) << "no heavy query found the heavy thread busy";
   EXPECT_GT(heavy_answered, 0);
+  grpc::ClientContext status_context;
+  v1::StatusResponse status;
+  ASSERT_TRUE(stub_->Status(&status_context, v1::StatusRequest(), &status).ok());
+  EXPECT_EQ(status.occupancy_copies(), 2);
+  EXPECT_GT(status.occupancy_bytes(), 1000u);
   // The heavy-query thread runs 7 nicer than this one (which opened the server).
   const int own_nice = getpriority(PRIO_PROCESS, 0);
   const auto threads = ProcessThreads();

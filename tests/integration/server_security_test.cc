@@ -62,6 +62,8 @@ TEST_F(ServerSecurity, TheCliReachesATlsServerWithItsTokenAndNothingElseDoes) {
   testing::CommandResult status = testing::RunObjmap("status" + tls + " --token-file " + reader);
   EXPECT_EQ(status.exit_code, 0) << status.output;
   EXPECT_NE(status.output.find("keyframes"), std::string::npos) << status.output;
+  EXPECT_NE(status.output.find("octomap:       "), std::string::npos) << status.output;
+  EXPECT_NE(status.output.find("kept twice"), std::string::npos) << status.output;
 
   status = testing::RunObjmap("status" + tls);
   EXPECT_EQ(status.exit_code, 1) << status.output;

@@ -1,5 +1,7 @@
 #include "map_server/map_server.h"
 
+#include <pthread.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -126,7 +128,10 @@ std::unique_ptr<MapServer> MapServer::Open(const MapServerConfig& config,
   // What this start had to integrate, the next one loads.
   impl.MaybeCheckpoint(/*force=*/true);
   impl.startup_ms = MillisecondsSince(start);
-  impl.worker = std::thread([&impl] { impl.Run(); });
+  impl.worker = std::thread([&impl] {
+    pthread_setname_np(pthread_self(), "objmap-mapping");
+    impl.Run();
+  });
   return server;
 }
 
@@ -462,6 +467,9 @@ ServerStatus MapServer::Status() const {
   status.last_checkpoint_ms = impl_->last_checkpoint_ms;
   status.startup_ms = impl_->startup_ms;
   status.startup_keyframes_integrated = impl_->startup_keyframes_integrated;
+  impl_->mapper->ReadOccupancy(
+      [&](const OccupancyMap& map) { status.occupancy_bytes = map.MemoryBytes(); });
+  status.occupancy_copies = impl_->config.mapper.occupancy_second_copy ? 2 : 1;
   return status;
 }
 

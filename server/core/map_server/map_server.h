@@ -160,6 +160,9 @@ struct ServerStatus {
   /// Keyframes integrated into the OctoMap at start: all of them without a usable checkpoint,
   /// only those after it otherwise.
   int startup_keyframes_integrated = 0;
+  /// Memory of one copy of the OctoMap (OcTree nodes), and how many copies are kept.
+  std::uint64_t occupancy_bytes = 0;
+  int occupancy_copies = 1;
 };
 
 /// The mapping server without transport: a durable store, one mapping thread that applies
@@ -168,8 +171,10 @@ struct ServerStatus {
 /// Thread-safety: every method may be called from any thread at any time. Writes (AddKeyframe,
 /// UpdatePoses) are queued and applied by the mapping thread in order; they return once the
 /// change is committed to the store (AddKeyframe) or the new poses are (UpdatePoses). Queries
-/// read the latest snapshot and never wait for a regeneration; occupancy queries wait at most
-/// for the OcTree write of one keyframe (its ray casting runs beside them).
+/// read the latest snapshot and the latest published OctoMap and never wait for a keyframe or a
+/// regeneration (MapperConfig::occupancy_second_copy). Heavy queries (QueryOccupancy,
+/// GetOctomap) run on threads of their own at a lower priority (FairnessConfig), so that many
+/// of them slow neither the writes nor the short queries.
 class MapServer {
  public:
   /// Opens (or creates) the store at `db_path` and rebuilds the map from it: same keyframe and

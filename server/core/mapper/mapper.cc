@@ -454,7 +454,7 @@ bool Mapper::Impl::RestoreOccupancy(const OccupancyCheckpoint& checkpoint, int* 
       return false;
     }
   }
-  return occupancy.Rewrite([&](OccupancyMap* map) {
+  return occupancy.Rebuild([&](OccupancyMap* map) {
     if (!map->ReadState(checkpoint.state, why)) return false;
     *integrated = 0;
     for (auto it = keyframes.upper_bound(last); it != keyframes.end(); ++it, ++*integrated) {
@@ -467,8 +467,7 @@ bool Mapper::Impl::RestoreOccupancy(const OccupancyCheckpoint& checkpoint, int* 
 void Mapper::Impl::RebuildOccupancy() {
   std::vector<const KeyframeRecord*> records;
   for (const auto& [id, record] : keyframes) records.push_back(&record);
-  occupancy.Rewrite([&](OccupancyMap* map) {
-    map->Clear();
+  occupancy.Rebuild([&](OccupancyMap* map) {
     map->IntegrateSequence(
         records.size(), [&records](std::size_t i) { return DepthScanOf(*records[i]); },
         config.regeneration.threads);

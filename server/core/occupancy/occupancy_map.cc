@@ -231,6 +231,8 @@ std::vector<Eigen::Vector3d> OccupancyMap::OccupiedVoxelCenters() const {
 
 void OccupancyMap::Clear() { impl_->tree.clear(); }
 
+std::size_t OccupancyMap::MemoryBytes() const { return impl_->tree.memoryUsage(); }
+
 const OccupancyConfig& OccupancyMap::config() const { return impl_->config; }
 
 }  // namespace objmap

@@ -230,6 +230,8 @@ class OccupancyMap {
   [[nodiscard]] std::vector<Eigen::Vector3d> OccupiedVoxelCenters() const;
 
   void Clear();
+  /// Memory held by the OcTree's nodes, bytes (OcTree::memoryUsage).
+  [[nodiscard]] std::size_t MemoryBytes() const;
   [[nodiscard]] const OccupancyConfig& config() const;
 
  private:

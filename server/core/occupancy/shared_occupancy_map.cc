@@ -1,5 +1,7 @@
 #include "occupancy/shared_occupancy_map.h"
 
+#include <malloc.h>
+
 #include <thread>
 
 namespace objmap {
@@ -52,10 +54,18 @@ void SharedOccupancyMap::CatchUp() {
     // The scan is still held by the latest copy's preparer: the next PrepareScan is this one's.
     stale.ApplyScanPreparedBy(latest_map);
   } else {
-    stale.Clear();  // first, so that three maps never exist at once
+    Release(&stale);  // first, so that three maps never exist at once
     stale = latest_map.Clone();
   }
   unpublished_behind_ = Behind::kNothing;
+}
+
+void SharedOccupancyMap::Release(OccupancyMap* map) {
+  map->Clear();
+  // The OcTree's millions of small nodes go back to glibc's bins for their size, which hand
+  // them out again one by one in no useful order; merging them into large free blocks first
+  // lets the next tree be allocated in the order it is built.
+  malloc_trim(0);
 }
 
 void SharedOccupancyMap::Publish(int index, Behind behind) {
@@ -88,6 +98,22 @@ bool SharedOccupancyMap::Rewrite(const std::function<bool(OccupancyMap*)>& rewri
   {
     std::unique_lock<std::shared_mutex> lock = LockUnpublished();
     if (!rewrite(&copies_[index])) return false;
+  }
+  Publish(index, Behind::kRewritten);
+  return true;
+}
+
+bool SharedOccupancyMap::Rebuild(const std::function<bool(OccupancyMap*)>& build) {
+  CatchUp();
+  const int index = Unpublished();
+  {
+    std::unique_lock<std::shared_mutex> lock = LockUnpublished();
+    Release(&copies_[index]);
+    if (!build(&copies_[index])) {
+      // Nothing published, but the copy no longer equals the published one.
+      if (second_copy_) unpublished_behind_ = Behind::kRewritten;
+      return false;
+    }
   }
   Publish(index, Behind::kRewritten);
   return true;

@@ -47,6 +47,14 @@ class SharedOccupancyMap {
   /// it must have left the copy unchanged, and nothing is published.
   bool Rewrite(const std::function<bool(OccupancyMap*)>& rewrite);
 
+  /// Runs `build` on an empty copy that no reader sees and publishes it when `build` returns
+  /// true (cloned into the other copy later); false publishes nothing (without a second copy,
+  /// the one copy is then left empty: rebuild it). The copy is emptied and
+  /// its memory given back to the allocator first, so a rebuild needs no third copy and its
+  /// nodes are not scattered over the old ones' freed places (which makes queries and updates
+  /// on the rebuilt tree about twice as slow).
+  bool Rebuild(const std::function<bool(OccupancyMap*)>& build);
+
   /// Brings the unpublished copy up to date now (waiting for its last readers), instead of at
   /// the start of the next write; for benchmarks and tests that compare the copies.
   void CatchUp();
@@ -59,6 +67,8 @@ class SharedOccupancyMap {
   // are done.
   [[nodiscard]] std::unique_lock<std::shared_mutex> LockUnpublished();
   void Publish(int index, Behind behind);
+  // Empties `map` and returns its nodes' memory to the allocator in one piece.
+  static void Release(OccupancyMap* map);
 
   bool second_copy_;
   std::array<OccupancyMap, 2> copies_;  // [1] stays empty without a second copy
