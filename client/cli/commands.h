@@ -12,6 +12,9 @@ int RunSegmentCommand(int argc, char** argv);
 /// `objmap eval <map-dir | ADDR> --gt ground_truth.json | --inventory counts.json`: scores a map.
 int RunEvalCommand(int argc, char** argv);
 
+/// `objmap eval-trajectory <estimated.txt> <reference.txt>`: ATE and RPE of a trajectory.
+int RunEvalTrajectoryCommand(int argc, char** argv);
+
 // Commands that talk to a running objmap_server (built with OBJMAP_WITH_GRPC).
 
 /// `objmap ingest <dataset>`: streams the keyframes of a recorded sequence to the server.

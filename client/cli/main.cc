@@ -19,6 +19,8 @@ void PrintUsage(std::ostream& out) {
          "  objmap segment <organized.pcd> --out <labelled.pcd>   segment one cloud\n"
          "  objmap eval <map-dir> --gt ground_truth.json | --inventory counts.json\n"
          "                                               score a map against ground truth\n"
+         "  objmap eval-trajectory <estimated.txt> <reference.txt>\n"
+         "                                               score a camera trajectory (ATE, RPE)\n"
 #ifdef OBJMAP_CLI_WITH_SERVER
          "commands for a running objmap_server (--server ADDR, default 127.0.0.1:50051):\n"
          "  objmap ingest <dataset>                      stream a sequence's keyframes\n"
@@ -39,6 +41,7 @@ const std::map<std::string, Command>& Commands() {
       {"map", objmap::cli::RunMapCommand},
       {"segment", objmap::cli::RunSegmentCommand},
       {"eval", objmap::cli::RunEvalCommand},
+      {"eval-trajectory", objmap::cli::RunEvalTrajectoryCommand},
 #ifdef OBJMAP_CLI_WITH_SERVER
       {"ingest", objmap::cli::RunIngestCommand},
       {"inventory", objmap::cli::RunInventoryCommand},

@@ -76,5 +76,58 @@ TEST_F(EvalCommand, BadUseAndBadFilesAreNamed) {
       << bad.output;
 }
 
+// `objmap eval-trajectory`: a reference trajectory and an estimate 2 cm off along x in every
+// other pose, in TUM files.
+class EvalTrajectoryCommand : public EvalCommand {
+ protected:
+  EvalTrajectoryCommand() {
+    std::ofstream reference(dir_ / "reference.txt");
+    std::ofstream estimated(dir_ / "estimated.txt");
+    reference << "# stamp tx ty tz qx qy qz qw\n";
+    for (int i = 0; i < 100; ++i) {
+      const double stamp = 1.0 + i / 30.0, x = 0.05 * i;
+      reference << stamp << " " << x << " 0 1 0 0 0 1\n";
+      estimated << stamp + 0.001 << " " << x + (i % 2 == 0 ? 0.02 : 0.0) << " 0 1 0 0 0 1\n";
+    }
+  }
+};
+
+TEST_F(EvalTrajectoryCommand, PrintsTheAbsoluteAndRelativeErrors) {
+  const auto run = RunObjmap("eval-trajectory " + Path("estimated.txt") + " " +
+                             Path("reference.txt") + " --json --errors " + Path("ate.txt"));
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const nlohmann::json scores = nlohmann::json::parse(run.output);
+  EXPECT_EQ(scores["matched"], 100);
+  // Aligned, the two halves sit 1 cm either side: every error is 1 cm.
+  EXPECT_NEAR(scores["ate_rmse_m"].get<double>(), 0.01, 1e-4);
+  EXPECT_NEAR(scores["ate_max_m"].get<double>(), 0.01, 1e-4);
+  EXPECT_GT(scores["rpe_pairs"].get<int>(), 50);
+  std::ifstream errors(Path("ate.txt"));
+  std::string header, line;
+  std::getline(errors, header);
+  int lines = 0;
+  while (std::getline(errors, line)) ++lines;
+  EXPECT_EQ(lines, 100);
+
+  const auto table = RunObjmap("eval-trajectory " + Path("estimated.txt") + " " +
+                               Path("reference.txt"));
+  ASSERT_EQ(table.exit_code, 0) << table.output;
+  EXPECT_NE(table.output.find("ATE RMSE 0.0100 m"), std::string::npos) << table.output;
+  EXPECT_NE(table.output.find("RPE over 1.00 m"), std::string::npos) << table.output;
+}
+
+TEST_F(EvalTrajectoryCommand, BadInputIsNamed) {
+  std::ofstream(dir_ / "bad.txt") << "1.0 0 0 0 0 0 0\n";
+  auto run = RunObjmap("eval-trajectory " + Path("bad.txt") + " " + Path("reference.txt"));
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("bad.txt:1"), std::string::npos) << run.output;
+  run = RunObjmap("eval-trajectory " + Path("estimated.txt") + " " + Path("reference.txt") +
+                  " --max-dt 0.0001");
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("0 of 100 estimated poses"), std::string::npos) << run.output;
+  run = RunObjmap("eval-trajectory " + Path("estimated.txt"));
+  EXPECT_EQ(run.exit_code, 2) << run.output;
+}
+
 }  // namespace
 }  // namespace objmap

@@ -8,14 +8,9 @@
 #include <vector>
 
 #include "dataset/frame_stream.h"
+#include "types/trajectory_pose.h"
 
 namespace objmap {
-
-/// One line of a trajectory: the camera pose T_W_C at `stamp_s`.
-struct TrajectoryPose {
-  double stamp_s = 0.0;
-  Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
-};
 
 /// Reads a TUM trajectory: lines `stamp tx ty tz qx qy qz qw` (seconds, metres, T_W_C), '#'
 /// comments and blank lines ignored, returned sorted by stamp. Quaternions within 1% of unit
