@@ -1,0 +1,342 @@
+#include "odometry/rgbd_odometry.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/core/eigen.hpp>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <vector>
+
+namespace objmap {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr double kDegPerRad = 57.29577951308232;
+
+double AngleDeg(const Eigen::Matrix3d& R) { return Eigen::AngleAxisd(R).angle() * kDegPerRad; }
+
+// ORB keypoints of one frame, with their 3D points where the depth is usable.
+struct FrameFeatures {
+  std::vector<cv::KeyPoint> keypoints;
+  cv::Mat descriptors;                  // one row per keypoint
+  std::vector<cv::Point3f> points_C;    // per keypoint; valid[i] says whether it has one
+  std::vector<std::uint8_t> valid;
+};
+
+// A frame that later frames are tracked against: only its keypoints with a 3D point.
+struct Keyframe {
+  Eigen::Isometry3d T_W_K = Eigen::Isometry3d::Identity();
+  std::vector<cv::Point3f> points_K;
+  cv::Mat descriptors;
+};
+
+// What PnP found for a frame against one keyframe.
+struct PoseFit {
+  bool ok = false;
+  Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
+  int matches = 0;
+  int inliers = 0;
+  double rmse_px = 0.0;
+  std::string why;
+};
+
+Eigen::Isometry3d FromRvecTvec(const cv::Mat& rvec, const cv::Mat& tvec) {
+  cv::Mat R;
+  cv::Rodrigues(rvec, R);
+  Eigen::Matrix3d rotation;
+  cv::cv2eigen(R, rotation);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = rotation;
+  T.translation() = Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2));
+  return T;
+}
+
+}  // namespace
+
+bool OdometryConfig::IsValid(std::string* why) const {
+  if (features < 50 || !(match_ratio > 0.f && match_ratio <= 1.f)) {
+    *why = "odometry: features must be >= 50 and match_ratio in (0, 1]";
+    return false;
+  }
+  if (!(min_depth_m >= 0.0 && max_depth_m > min_depth_m && std::isfinite(max_depth_m))) {
+    *why = "odometry: need 0 <= min_depth_m < max_depth_m, finite";
+    return false;
+  }
+  if (!(ransac_reprojection_px > 0.0) || ransac_iterations < 1 || min_inliers < 6) {
+    *why = "odometry: ransac_reprojection_px > 0, ransac_iterations >= 1 and min_inliers >= 6";
+    return false;
+  }
+  if (!(max_step_m > 0.0) || !(max_step_deg > 0.0) || !(keyframe_distance_m > 0.0) ||
+      !(keyframe_angle_deg > 0.0) || keyframe_min_inliers < min_inliers ||
+      relocalisation_keyframes < 0) {
+    *why =
+        "odometry: step and keyframe limits must be positive, keyframe_min_inliers >= "
+        "min_inliers and relocalisation_keyframes >= 0";
+    return false;
+  }
+  return true;
+}
+
+const char* TrackingStatusName(TrackingStatus status) {
+  switch (status) {
+    case TrackingStatus::kInitialized:
+      return "initialized";
+    case TrackingStatus::kTracked:
+      return "tracked";
+    case TrackingStatus::kRelocalized:
+      return "relocalized";
+    case TrackingStatus::kLost:
+      return "lost";
+  }
+  return "?";
+}
+
+struct RgbdOdometry::Impl {
+  explicit Impl(const OdometryConfig& c)
+      : config(c),
+        orb(cv::ORB::create(c.features)),
+        matcher(cv::NORM_HAMMING) {}
+
+  OdometryConfig config;
+  cv::Ptr<cv::ORB> orb;
+  cv::BFMatcher matcher;
+  std::vector<Keyframe> keyframes;
+  int current_keyframe = -1;
+  bool has_last = false;
+  Eigen::Isometry3d last_T_W_C = Eigen::Isometry3d::Identity();
+
+  bool Extract(const RgbdFrame& frame, FrameFeatures* features, std::string* why);
+  PoseFit Fit(const FrameFeatures& features, const Keyframe& keyframe,
+              const CameraIntrinsics& K) ;
+  void AddKeyframe(const FrameFeatures& features, const Eigen::Isometry3d& T_W_C);
+};
+
+bool RgbdOdometry::Impl::Extract(const RgbdFrame& frame, FrameFeatures* features,
+                                 std::string* why) {
+  const CameraIntrinsics& K = frame.intrinsics;
+  if (frame.color.empty() || frame.depth.empty()) {
+    *why = "the frame needs colour and depth";
+    return false;
+  }
+  if (frame.color.width != frame.depth.width || frame.color.height != frame.depth.height ||
+      frame.depth.width != K.width || frame.depth.height != K.height) {
+    *why = "colour, depth and intrinsics sizes differ";
+    return false;
+  }
+  const cv::Mat rgb(frame.color.height, frame.color.width, CV_8UC3,
+                    const_cast<std::uint8_t*>(frame.color.rgb.data()));
+  cv::Mat grey;
+  cv::cvtColor(rgb, grey, cv::COLOR_RGB2GRAY);
+  orb->detectAndCompute(grey, cv::noArray(), features->keypoints, features->descriptors);
+  const std::size_t n = features->keypoints.size();
+  features->points_C.assign(n, cv::Point3f());
+  features->valid.assign(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const cv::Point2f& p = features->keypoints[i].pt;
+    const int u = static_cast<int>(std::lround(p.x)), v = static_cast<int>(std::lround(p.y));
+    if (u < 0 || v < 0 || u >= K.width || v >= K.height) continue;
+    const float z = frame.depth.depth_m[static_cast<std::size_t>(v) * K.width + u];
+    if (!std::isfinite(z) || z < config.min_depth_m || z > config.max_depth_m) continue;
+    features->points_C[i] = cv::Point3f(static_cast<float>((p.x - K.cx) * z / K.fx),
+                                        static_cast<float>((p.y - K.cy) * z / K.fy), z);
+    features->valid[i] = 1;
+  }
+  return true;
+}
+
+void RgbdOdometry::Impl::AddKeyframe(const FrameFeatures& features,
+                                     const Eigen::Isometry3d& T_W_C) {
+  Keyframe keyframe;
+  keyframe.T_W_K = T_W_C;
+  for (std::size_t i = 0; i < features.keypoints.size(); ++i) {
+    if (!features.valid[i]) continue;
+    keyframe.points_K.push_back(features.points_C[i]);
+    keyframe.descriptors.push_back(features.descriptors.row(static_cast<int>(i)));
+  }
+  keyframes.push_back(std::move(keyframe));
+  current_keyframe = static_cast<int>(keyframes.size()) - 1;
+}
+
+PoseFit RgbdOdometry::Impl::Fit(const FrameFeatures& features, const Keyframe& keyframe,
+                                const CameraIntrinsics& K) {
+  PoseFit fit;
+  if (features.descriptors.empty() || keyframe.descriptors.rows < 2) {
+    fit.why = "no features to match";
+    return fit;
+  }
+  std::vector<std::vector<cv::DMatch>> knn;
+  matcher.knnMatch(features.descriptors, keyframe.descriptors, knn, 2);
+  std::vector<cv::Point3f> object_points;
+  std::vector<cv::Point2f> image_points;
+  for (const auto& pair : knn) {
+    if (pair.size() < 2 || pair[0].distance >= config.match_ratio * pair[1].distance) continue;
+    object_points.push_back(keyframe.points_K[static_cast<std::size_t>(pair[0].trainIdx)]);
+    image_points.push_back(features.keypoints[static_cast<std::size_t>(pair[0].queryIdx)].pt);
+  }
+  fit.matches = static_cast<int>(object_points.size());
+  if (fit.matches < config.min_inliers) {
+    fit.why = std::to_string(fit.matches) + " feature matches, " +
+              std::to_string(config.min_inliers) + " needed";
+    return fit;
+  }
+  const cv::Matx33d camera(K.fx, 0, K.cx, 0, K.fy, K.cy, 0, 0, 1);
+  cv::Mat rvec, tvec;
+  std::vector<int> inliers;
+  const bool solved = cv::solvePnPRansac(
+      object_points, image_points, camera, cv::noArray(), rvec, tvec, false,
+      config.ransac_iterations, static_cast<float>(config.ransac_reprojection_px), 0.999,
+      inliers, cv::SOLVEPNP_EPNP);
+  fit.inliers = static_cast<int>(inliers.size());
+  if (!solved || fit.inliers < config.min_inliers) {
+    fit.why = std::to_string(fit.inliers) + " PnP inliers of " + std::to_string(fit.matches) +
+              " matches, " + std::to_string(config.min_inliers) + " needed";
+    return fit;
+  }
+  // Least squares on the inliers (RANSAC's pose comes from a minimal set).
+  std::vector<cv::Point3f> inlier_object;
+  std::vector<cv::Point2f> inlier_image;
+  for (int i : inliers) {
+    inlier_object.push_back(object_points[static_cast<std::size_t>(i)]);
+    inlier_image.push_back(image_points[static_cast<std::size_t>(i)]);
+  }
+  cv::solvePnPRefineLM(inlier_object, inlier_image, camera, cv::noArray(), rvec, tvec);
+  std::vector<cv::Point2f> projected;
+  cv::projectPoints(inlier_object, rvec, tvec, camera, cv::noArray(), projected);
+  double sum_sq = 0.0;
+  for (std::size_t i = 0; i < projected.size(); ++i) {
+    const cv::Point2f d = projected[i] - inlier_image[i];
+    sum_sq += d.dot(d);
+  }
+  fit.rmse_px = std::sqrt(sum_sq / static_cast<double>(std::max<std::size_t>(1, projected.size())));
+  // PnP maps keyframe points into this camera: T_C_K.
+  const Eigen::Isometry3d T_C_K = FromRvecTvec(rvec, tvec);
+  fit.T_W_C = keyframe.T_W_K * T_C_K.inverse();
+  fit.ok = true;
+  return fit;
+}
+
+RgbdOdometry::RgbdOdometry(const OdometryConfig& config)
+    : impl_(std::make_unique<Impl>(config)) {}
+RgbdOdometry::~RgbdOdometry() = default;
+RgbdOdometry::RgbdOdometry(RgbdOdometry&&) noexcept = default;
+RgbdOdometry& RgbdOdometry::operator=(RgbdOdometry&&) noexcept = default;
+
+int RgbdOdometry::num_keyframes() const { return static_cast<int>(impl_->keyframes.size()); }
+
+TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
+  const auto start = Clock::now();
+  TrackingReport report;
+  auto finish = [&]() -> TrackingReport {
+    report.ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    return report;
+  };
+  Impl& impl = *impl_;
+  const OdometryConfig& config = impl.config;
+  FrameFeatures features;
+  if (!impl.Extract(frame, &features, &report.why)) return finish();
+  report.keypoints = static_cast<int>(features.keypoints.size());
+  const int with_depth = static_cast<int>(
+      std::count(features.valid.begin(), features.valid.end(), std::uint8_t{1}));
+
+  if (impl.keyframes.empty()) {
+    if (with_depth < config.min_inliers) {
+      report.why = std::to_string(with_depth) + " keypoints with depth, " +
+                   std::to_string(config.min_inliers) + " needed to start";
+      return finish();
+    }
+    impl.AddKeyframe(features, Eigen::Isometry3d::Identity());
+    impl.has_last = true;
+    impl.last_T_W_C = Eigen::Isometry3d::Identity();
+    report.status = TrackingStatus::kInitialized;
+    report.new_keyframe = true;
+    report.reference_keyframe = impl.current_keyframe;
+    return finish();
+  }
+
+  // A pose that moved implausibly far from the last one is a wrong PnP solution.
+  auto plausible = [&](const PoseFit& fit, std::string* why) {
+    if (!impl.has_last) return true;
+    const Eigen::Isometry3d step = impl.last_T_W_C.inverse() * fit.T_W_C;
+    if (step.translation().norm() > config.max_step_m || AngleDeg(step.linear()) > config.max_step_deg) {
+      *why = "implausible motion since the last frame";
+      return false;
+    }
+    return true;
+  };
+
+  PoseFit fit = impl.Fit(features, impl.keyframes[static_cast<std::size_t>(impl.current_keyframe)],
+                         frame.intrinsics);
+  std::string implausible;
+  bool accepted = fit.ok && plausible(fit, &implausible);
+  report.reference_keyframe = impl.current_keyframe;
+  report.status = TrackingStatus::kTracked;
+  if (!accepted) {
+    // Relocalisation: the other keyframes, nearest to the last known pose first.
+    std::vector<int> order;
+    for (int k = 0; k < static_cast<int>(impl.keyframes.size()); ++k) {
+      if (k != impl.current_keyframe) order.push_back(k);
+    }
+    std::sort(order.begin(), order.end(), [&](int a, int b) {
+      return (impl.keyframes[static_cast<std::size_t>(a)].T_W_K.translation() -
+              impl.last_T_W_C.translation())
+                 .norm() <
+             (impl.keyframes[static_cast<std::size_t>(b)].T_W_K.translation() -
+              impl.last_T_W_C.translation())
+                 .norm();
+    });
+    if (static_cast<int>(order.size()) > config.relocalisation_keyframes) {
+      order.resize(static_cast<std::size_t>(config.relocalisation_keyframes));
+    }
+    const std::string first_failure = fit.ok ? implausible : fit.why;
+    for (int k : order) {
+      PoseFit candidate =
+          impl.Fit(features, impl.keyframes[static_cast<std::size_t>(k)], frame.intrinsics);
+      // After a loss the last pose may be old: only the fit itself is checked.
+      if (candidate.ok) {
+        fit = candidate;
+        accepted = true;
+        report.reference_keyframe = k;
+        report.status = TrackingStatus::kRelocalized;
+        impl.current_keyframe = k;
+        break;
+      }
+    }
+    if (!accepted) {
+      report.status = TrackingStatus::kLost;
+      report.matches = fit.matches;
+      report.inliers = fit.inliers;
+      report.why = first_failure;
+      impl.has_last = false;  // the motion check needs a recent pose
+      return finish();
+    }
+  }
+  report.T_W_C = fit.T_W_C;
+  report.matches = fit.matches;
+  report.inliers = fit.inliers;
+  report.reprojection_rmse_px = fit.rmse_px;
+  impl.has_last = true;
+  impl.last_T_W_C = fit.T_W_C;
+
+  auto needs_keyframe = [&](const Keyframe& keyframe, const Eigen::Isometry3d& T_W_C,
+                            int inliers) {
+    const Eigen::Isometry3d from_keyframe = keyframe.T_W_K.inverse() * T_W_C;
+    return from_keyframe.translation().norm() > config.keyframe_distance_m ||
+           AngleDeg(from_keyframe.linear()) > config.keyframe_angle_deg ||
+           inliers < config.keyframe_min_inliers;
+  };
+  if (!needs_keyframe(impl.keyframes[static_cast<std::size_t>(impl.current_keyframe)], fit.T_W_C,
+                      fit.inliers)) {
+    return finish();
+  }
+  if (with_depth >= config.min_inliers) {
+    impl.AddKeyframe(features, fit.T_W_C);
+    report.new_keyframe = true;
+  }
+  return finish();
+}
+
+}  // namespace objmap

@@ -1,0 +1,88 @@
+#pragma once
+// Camera tracking from the RGB-D frames alone, for sources without poses (a bare camera, a
+// recording or a bag without them): each frame is tracked against a keyframe by ORB features
+// with depth, PnP in RANSAC and a least-squares refinement on the inliers.
+
+#include <Eigen/Geometry>
+#include <memory>
+#include <string>
+
+#include "types/frame.h"
+
+namespace objmap {
+
+struct OdometryConfig {
+  /// ORB keypoints detected per frame.
+  int features = 1000;
+  /// A match is kept when its distance is below this fraction of the second best (Lowe).
+  float match_ratio = 0.8f;
+  /// Keypoints whose depth lies outside [min_depth_m, max_depth_m] have no 3D point (noise of
+  /// structured-light sensors grows with the square of the range).
+  double min_depth_m = 0.2;
+  double max_depth_m = 4.0;
+  /// PnP in RANSAC: reprojection tolerance of an inlier, pixels, and iterations.
+  double ransac_reprojection_px = 3.0;
+  int ransac_iterations = 300;
+  /// A pose needs at least this many inliers; fewer: the frame is not tracked (blank wall,
+  /// dark, blurred or too fast), and no pose is given for it.
+  int min_inliers = 30;
+  /// Motion between consecutive tracked frames beyond these is refused as implausible (a wrong
+  /// PnP solution), so that no wild pose enters the map.
+  double max_step_m = 0.3;
+  double max_step_deg = 30.0;
+  /// The frame becomes the keyframe that later frames are tracked against when it is this far
+  /// from the current keyframe, or when fewer inliers than keyframe_min_inliers remain.
+  double keyframe_distance_m = 0.1;
+  double keyframe_angle_deg = 10.0;
+  int keyframe_min_inliers = 100;
+  /// Keyframes tried, nearest to the last pose first, when tracking against the current one
+  /// fails (relocalisation).
+  int relocalisation_keyframes = 8;
+
+  [[nodiscard]] bool IsValid(std::string* why) const;
+};
+
+enum class TrackingStatus {
+  kInitialized,  ///< the first frame: the world frame is its camera frame
+  kTracked,      ///< pose found against the current keyframe
+  kRelocalized,  ///< pose found against another keyframe after tracking failed
+  kLost,         ///< no pose: `why` says what failed
+};
+
+/// What tracking one frame found.
+struct TrackingReport {
+  TrackingStatus status = TrackingStatus::kLost;
+  Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();  ///< valid unless kLost
+  int keypoints = 0;       ///< ORB keypoints in the frame
+  int matches = 0;         ///< to the keyframe tracked against, after the ratio test
+  int inliers = 0;         ///< of PnP RANSAC
+  double reprojection_rmse_px = 0.0;  ///< of the PnP inliers, after least squares
+  int reference_keyframe = -1;        ///< index of the keyframe tracked against
+  bool new_keyframe = false;          ///< this frame became a keyframe
+  double ms = 0.0;                    ///< time spent
+  std::string why;                    ///< kLost: the reason
+};
+
+/// Thread-safety: none (one camera, one thread).
+class RgbdOdometry {
+ public:
+  /// `config` must satisfy IsValid().
+  explicit RgbdOdometry(const OdometryConfig& config);
+  ~RgbdOdometry();
+  RgbdOdometry(RgbdOdometry&&) noexcept;
+  RgbdOdometry& operator=(RgbdOdometry&&) noexcept;
+
+  /// Tracks one frame (its T_W_C is ignored). Frames must come in time order; a frame without
+  /// colour or depth, or whose sizes differ from the intrinsics, is kLost with the reason.
+  TrackingReport Track(const RgbdFrame& frame);
+
+  [[nodiscard]] int num_keyframes() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+[[nodiscard]] const char* TrackingStatusName(TrackingStatus status);
+
+}  // namespace objmap

@@ -1,0 +1,91 @@
+// RgbdOdometry on a recorded sequence, its poses ignored: time per frame, frames lost, keyframes,
+// and the trajectory scored against the sequence's own poses (ATE after rigid alignment, RPE).
+// Writes the estimated trajectory in TUM format (frame index / 30 as the stamp) for
+// `objmap eval-trajectory` and for other tools.
+//   odometry_bench [sequence=../shared/data/redkitchen] [frames=all] [out=odometry.txt]
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "dataset/sequence_reader.h"
+#include "evaluation/trajectory_evaluation.h"
+#include "odometry/rgbd_odometry.h"
+
+namespace {
+
+double Percentile(std::vector<double> values, double p) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  return values[std::min(values.size() - 1, static_cast<std::size_t>(p * (values.size() - 1) + 0.5))];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace objmap;
+  const std::string path = argc > 1 ? argv[1] : "../shared/data/redkitchen";
+  const long wanted = argc > 2 ? std::atol(argv[2]) : 0;
+  const std::string out = argc > 3 ? argv[3] : "odometry.txt";
+  std::string why;
+  std::unique_ptr<SequenceReader> reader = OpenSequence(path, &why);
+  if (!reader) {
+    std::fprintf(stderr, "odometry_bench: %s\n", why.c_str());
+    return 1;
+  }
+  const std::size_t count =
+      wanted > 0 ? std::min<std::size_t>(reader->size(), static_cast<std::size_t>(wanted))
+                 : reader->size();
+  RgbdOdometry odometry{OdometryConfig{}};
+  std::vector<TrajectoryPose> estimated, reference;
+  std::vector<double> ms;
+  int lost = 0, relocalized = 0;
+  for (std::size_t i = 0; i < count; ++i) {
+    RgbdFrame frame;
+    if (!reader->ReadFrame(i, &frame, &why)) {
+      std::fprintf(stderr, "odometry_bench: %s\n", why.c_str());
+      return 1;
+    }
+    const double stamp = static_cast<double>(i) / 30.0;
+    reference.push_back({stamp, frame.T_W_C});
+    const TrackingReport report = odometry.Track(frame);
+    ms.push_back(report.ms);
+    if (report.status == TrackingStatus::kLost) {
+      ++lost;
+      std::printf("frame %zu lost: %s\n", i, report.why.c_str());
+      continue;
+    }
+    if (report.status == TrackingStatus::kRelocalized) ++relocalized;
+    estimated.push_back({stamp, report.T_W_C});
+  }
+  std::ofstream file(out);
+  file << "# stamp tx ty tz qx qy qz qw (RgbdOdometry, " << reader->Describe() << ")\n";
+  for (const TrajectoryPose& pose : estimated) {
+    const Eigen::Quaterniond q(pose.T_W_C.linear());
+    const Eigen::Vector3d t = pose.T_W_C.translation();
+    char line[256];
+    std::snprintf(line, sizeof(line), "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", pose.stamp_s,
+                  t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+    file << line;
+  }
+  double sum = 0.0;
+  for (double value : ms) sum += value;
+  std::printf("odometry_bench: %s, %zu frames: %.1f ms per frame mean, p50 %.1f, p99 %.1f; "
+              "%d lost, %d relocalized, %d keyframes\n",
+              reader->Describe().c_str(), count, sum / std::max<std::size_t>(1, ms.size()),
+              Percentile(ms, 0.5), Percentile(ms, 0.99), lost, relocalized,
+              odometry.num_keyframes());
+  TrajectoryErrors errors;
+  if (!EvaluateTrajectory(estimated, reference, TrajectoryEvaluationConfig{}, &errors, &why)) {
+    std::printf("no score: %s\n", why.c_str());
+    return 0;
+  }
+  std::printf("ATE RMSE %.4f m (mean %.4f, max %.4f) over %zu poses; RPE over 1 m: %.2f %%, "
+              "%.3f deg/m (%zu stretches); trajectory in %s\n",
+              errors.ate_rmse_m, errors.ate_mean_m, errors.ate_max_m, errors.matched,
+              errors.rpe_translation_percent, errors.rpe_rotation_deg_per_m, errors.rpe_pairs,
+              out.c_str());
+  return 0;
+}
