@@ -18,6 +18,7 @@
 #include "detection/centernet_detector.h"
 #include "detection/detections_file.h"
 #include "detection/model_location.h"
+#include "evaluation/trajectory_evaluation.h"
 #include "map_inputs.h"
 #include "mapper/map_export.h"
 #include "pipeline/sequence_runner.h"
@@ -60,6 +61,11 @@ constexpr char kMapUsage[] =
     "                            are skipped. Without it the camera is static at the identity\n"
     "                            pose\n"
     "  --trajectory-tolerance S  largest frame/pose stamp difference, seconds (default 0.02)\n"
+    "  --poses SOURCE            input: the input's poses (a dataset's, a bag's, --trajectory);\n"
+    "                            estimate: tracked by RGB-D odometry from the frames alone\n"
+    "                            (frames it cannot track are skipped with the reason); with a\n"
+    "                            dataset, the estimate is scored against its poses (ATE, RPE)\n"
+    "                            and written to <out>/trajectory.txt (default: input)\n"
     "  --min-translation M       keyframe after this much motion, metres (keyframes section)\n"
     "  --min-rotation DEG        keyframe after this much rotation, degrees (keyframes section)\n"
     "  --every-frame             every frame is a keyframe\n"
@@ -252,8 +258,51 @@ MapInputOptions InputOptionsFrom(Arguments& args, const SequenceRunConfig& run_c
   options.trajectory_path = args.Get("--trajectory", "");
   options.trajectory_match.max_stamp_difference_s =
       args.GetNumber("--trajectory-tolerance", options.trajectory_match.max_stamp_difference_s);
+  const std::string poses = args.Get("--poses", "input");
+  if (poses != "input" && poses != "estimate") {
+    args.SetError("--poses must be input or estimate, not " + poses);
+  }
+  options.estimate_poses = poses == "estimate";
   BagOptionsFrom(args, &options);
   return options;
+}
+
+// Prints how tracking went and, when the input had poses of its own, the estimate's errors
+// against them; writes the estimated trajectory (TUM format).
+bool ReportEstimatedTrajectory(const EstimatedTrajectory& trajectory, bool source_has_poses,
+                               const std::string& path, std::string* why) {
+  std::printf("odometry: %d frames, %d tracked, %d lost, %d relocalized, %.1f ms per frame\n",
+              trajectory.frames, trajectory.frames - trajectory.lost, trajectory.lost,
+              trajectory.relocalized,
+              trajectory.tracking_ms / std::max(1, trajectory.frames));
+  std::ofstream out(path);
+  out << "# stamp tx ty tz qx qy qz qw: T_W_C estimated by objmap's RGB-D odometry\n";
+  char line[256];
+  for (const TrajectoryPose& pose : trajectory.estimated) {
+    const Eigen::Quaterniond q(pose.T_W_C.linear());
+    const Eigen::Vector3d t = pose.T_W_C.translation();
+    std::snprintf(line, sizeof(line), "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", pose.stamp_s,
+                  t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+    out << line;
+  }
+  if (!out) {
+    *why = "cannot write " + path;
+    return false;
+  }
+  if (!source_has_poses) return true;
+  TrajectoryErrors errors;
+  std::string reason;
+  if (!EvaluateTrajectory(trajectory.estimated, trajectory.source, TrajectoryEvaluationConfig{},
+                          &errors, &reason)) {
+    std::printf("odometry against the input's poses: not scored (%s)\n", reason.c_str());
+    return true;
+  }
+  std::printf(
+      "odometry against the input's poses: ATE RMSE %.4f m (max %.4f) over %zu poses; RPE over "
+      "1 m: %.2f %%, %.3f deg/m\n",
+      errors.ate_rmse_m, errors.ate_max_m, errors.matched, errors.rpe_translation_percent,
+      errors.rpe_rotation_deg_per_m);
+  return true;
 }
 
 int Fail(const std::string& message) {
@@ -320,7 +369,7 @@ int RunMapCommand(int argc, char** argv) {
       {"--out", "--config", "--set", "--model", "--detections", "--save-detections",
        "--score-threshold", "--first-frame", "--max-frames", "--min-translation", "--min-rotation",
        "--every-nth-frame", "--min-observations", "--min-confidence", "--min-evidence",
-       "--corrected-poses", "--trajectory", "--trajectory-tolerance"});
+       "--corrected-poses", "--trajectory", "--trajectory-tolerance", "--poses"});
   flags_with_value.merge(MapBagFlags());
   Arguments args(static_cast<int>(words.size()), words.data(), flags_with_value,
                  {"--every-frame", "--stop-on-error", "--print-config", "--help"});
@@ -388,7 +437,12 @@ int RunMapCommand(int argc, char** argv) {
       !WriteDetectionsFile(args.Get("--save-detections", ""), recorder->recorded(), &why)) {
     return Fail(why);
   }
-  std::cout << "wrote " << out_dir << "/map.bt, objects.json, objects/*.ply, timings.csv\n";
+  if (input.estimated && !ReportEstimatedTrajectory(*input.estimated, input.source_has_poses,
+                                                    out_dir + "/trajectory.txt", &why)) {
+    return Fail(why);
+  }
+  std::cout << "wrote " << out_dir << "/map.bt, objects.json, objects/*.ply, timings.csv"
+            << (input.estimated ? ", trajectory.txt" : "") << "\n";
   return completed ? 0 : 1;
 }
 

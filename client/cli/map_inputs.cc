@@ -22,7 +22,11 @@ bool IsOpenNI2Argument(const std::string& argument) {
 // Gives a camera or recording its poses: from the trajectory file, or none (identity).
 bool AddPoses(const MapInputOptions& options, MapInput* input, std::string* why) {
   if (options.trajectory_path.empty()) {
-    input->note = "no --trajectory: the camera is taken as static at the identity pose";
+    if (!options.estimate_poses) {
+      input->note =
+          "no --trajectory: the camera is taken as static at the identity pose (--poses "
+          "estimate tracks it)";
+    }
     return true;
   }
   std::vector<TrajectoryPose> poses;
@@ -34,6 +38,19 @@ bool AddPoses(const MapInputOptions& options, MapInput* input, std::string* why)
       "poses from " + options.trajectory_path + " (" + std::to_string(poses.size()) + " poses)";
   input->stream = WithTrajectory(std::move(input->stream), std::move(poses),
                                  options.trajectory_match, options.trajectory_path);
+  input->source_has_poses = true;
+  return true;
+}
+
+// --poses estimate: the odometry replaces whatever poses the stream has.
+bool EstimatePoses(const MapInputOptions& options, MapInput* input, std::string* why) {
+  if (!options.estimate_poses) return true;
+  if (!options.odometry.IsValid(why)) return false;
+  input->estimated = std::make_shared<EstimatedTrajectory>();
+  input->stream = WithEstimatedPoses(std::move(input->stream), options.odometry, input->estimated);
+  input->note += std::string(input->note.empty() ? "" : "; ") +
+                 "poses estimated by RGB-D odometry" +
+                 (input->source_has_poses ? " (the input's own poses only score them)" : "");
   return true;
 }
 
@@ -62,6 +79,7 @@ bool StreamSequence(const MapInputOptions& options, MapInput* input, std::string
   input->stream =
       SelectSequenceFrames(*input->sequence, options.first_frame, options.max_frames, why);
   input->selection_applied = true;
+  input->source_has_poses = true;
   return input->stream != nullptr;
 }
 
@@ -92,7 +110,8 @@ void BagOptionsFrom(const Arguments& args, MapInputOptions* options) {
 bool OpenMapInput(const std::string& argument, const MapInputOptions& options, MapInput* input,
                   std::string* why) {
   if (IsOpenNI2Argument(argument)) {
-    return OpenOpenNI2(argument, input, why) && AddPoses(options, input, why);
+    return OpenOpenNI2(argument, input, why) && AddPoses(options, input, why) &&
+           EstimatePoses(options, input, why);
   }
   if (EndsWith(argument, ".bag")) {
 #ifdef OBJMAP_CLI_WITH_ROSBAG
@@ -105,7 +124,8 @@ bool OpenMapInput(const std::string& argument, const MapInputOptions& options, M
   } else {
     input->sequence = OpenSequence(argument, why);
   }
-  return input->sequence != nullptr && StreamSequence(options, input, why);
+  return input->sequence != nullptr && StreamSequence(options, input, why) &&
+         EstimatePoses(options, input, why);
 }
 
 }  // namespace objmap::cli

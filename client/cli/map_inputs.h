@@ -11,6 +11,7 @@
 #include "dataset/frame_stream.h"
 #include "dataset/sequence_reader.h"
 #include "dataset/trajectory.h"
+#include "odometry/odometry_stream.h"
 
 namespace objmap::cli {
 
@@ -23,6 +24,10 @@ struct MapInputOptions {
   /// identity pose. Sequence folders bring their own poses and ignore it.
   std::string trajectory_path;
   TrajectoryMatchConfig trajectory_match;
+  /// --poses estimate: every frame's pose from RgbdOdometry, whatever the input brings (a
+  /// dataset's own poses are kept to score the estimate against).
+  bool estimate_poses = false;
+  OdometryConfig odometry;
   /// ROS bags; an empty field keeps the reader's default (topics: auto-detected).
   std::string bag_color_topic;        ///< --bag-color-topic
   std::string bag_depth_topic;        ///< --bag-depth-topic
@@ -50,6 +55,11 @@ struct MapInput {
   bool selection_applied = false;
   /// Printed before the run: how poses are obtained, when the user should know.
   std::string note;
+  /// With estimate_poses: the tracked trajectory, filled as frames are read.
+  std::shared_ptr<EstimatedTrajectory> estimated;
+  /// The source's own poses are real (a dataset's, a bag's, a --trajectory's), so the estimate
+  /// can be scored against them.
+  bool source_has_poses = false;
 };
 
 /// Opens `argument`: `openni2` (the first OpenNI2 device), `openni2:<uri>`, a path ending in

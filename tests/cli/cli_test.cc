@@ -125,6 +125,35 @@ TEST_F(CliScene, BadFramesAreSkippedWithTheirFileNamedOrStopTheRun) {
   EXPECT_NE(run.output.find("stopped at frame 1"), std::string::npos) << run.output;
 }
 
+TEST_F(CliScene, EstimatedPosesOnRealFramesAreScoredAgainstTheDatasets) {
+  const std::string redkitchen = testing::SharedDataPath("redkitchen");
+  OBJMAP_REQUIRE_PATH(redkitchen);
+  std::ofstream(Path("none.json")) << R"({"frames": {}})";
+  const CommandResult run =
+      RunObjmap("map " + redkitchen + " --out " + Path("est") + " --detections " +
+                Path("none.json") + " --max-frames 60 --poses estimate");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("poses estimated by RGB-D odometry (the input's own poses only score "
+                            "them)"),
+            std::string::npos)
+      << run.output;
+  EXPECT_NE(run.output.find("odometry: 60 frames, 60 tracked, 0 lost"), std::string::npos)
+      << run.output;
+  const std::size_t ate = run.output.find("ATE RMSE ");
+  ASSERT_NE(ate, std::string::npos) << run.output;
+  EXPECT_LT(std::stod(run.output.substr(ate + 9)), 0.03) << run.output;
+  std::ifstream trajectory(Path("est/trajectory.txt"));
+  std::string line;
+  int poses = 0;
+  while (std::getline(trajectory, line)) poses += line.empty() || line[0] == '#' ? 0 : 1;
+  EXPECT_EQ(poses, 60);
+
+  const CommandResult wrong = RunObjmap(MapArguments("--poses gps"));
+  EXPECT_EQ(wrong.exit_code, 2) << wrong.output;
+  EXPECT_NE(wrong.output.find("--poses must be input or estimate, not gps"), std::string::npos)
+      << wrong.output;
+}
+
 TEST_F(CliScene, EmptyOrMissingInputIsAClearError) {
   fs::create_directories(Path("empty"));
   CommandResult run = RunObjmap("map " + Path("empty") + " --out " + Path("o") + " --detections " +

@@ -1,0 +1,35 @@
+#pragma once
+// A frame stream whose poses come from RgbdOdometry: how a camera, a recording or a sequence
+// without (or ignoring) its own poses gets them.
+
+#include <memory>
+#include <vector>
+
+#include "dataset/frame_stream.h"
+#include "odometry/rgbd_odometry.h"
+#include "types/trajectory_pose.h"
+
+namespace objmap {
+
+/// What tracking a stream found, for a summary and for scoring against the source's poses.
+struct EstimatedTrajectory {
+  std::vector<TrajectoryPose> estimated;  ///< per tracked frame
+  /// The pose each tracked frame came with from its source (a dataset's reference poses; the
+  /// identity from a source without any), at the same stamps as `estimated`.
+  std::vector<TrajectoryPose> source;
+  int frames = 0;
+  int lost = 0;
+  int relocalized = 0;
+  double tracking_ms = 0.0;  ///< in all
+};
+
+/// Frames of `inner` with T_W_C replaced by the odometry's estimate (the world frame is the first
+/// tracked frame's camera frame). A frame the odometry cannot track is a kBadFrame whose reason
+/// starts "tracking lost: ", so that the runner skips it with the reason and no wild pose enters
+/// the map. Stamps: the frame's, or frame_index / 30 s where the source has none. `log`
+/// (not null) receives the trajectories as frames pass.
+[[nodiscard]] std::unique_ptr<FrameStream> WithEstimatedPoses(
+    std::unique_ptr<FrameStream> inner, const OdometryConfig& config,
+    std::shared_ptr<EstimatedTrajectory> log);
+
+}  // namespace objmap
