@@ -16,6 +16,7 @@ readonly PACKAGES=(
   libeigen3-dev liboctomap-dev libpcl-dev libopencv-dev nlohmann-json3-dev
   libsqlite3-dev libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc
   libyaml-cpp-dev
+  libceres-dev  # the pose graph (Ceres 2.1, Manifold API)
   libopenni2-dev  # live OpenNI2 cameras and .oni recordings for `objmap map`
   libminizip-dev sweethome3d-furniture  # synthetic scenes: the furniture meshes and their zips
   libgtest-dev libgmock-dev libbenchmark-dev

@@ -1,0 +1,214 @@
+#include "posegraph/pose_graph.h"
+
+#include <ceres/ceres.h>
+
+#include <chrono>
+#include <cmath>
+
+namespace objmap {
+namespace {
+
+// Error of one edge: the measured relative pose against the one the two node poses give,
+// whitened by the square root of the information. Nodes: position (3) and unit quaternion (4,
+// Eigen's x y z w order, on ceres::EigenQuaternionManifold).
+class RelativePoseError {
+ public:
+  RelativePoseError(const Eigen::Isometry3d& T_from_to,
+                    const Eigen::Matrix<double, 6, 6>& sqrt_info)
+      : p_measured_(T_from_to.translation()),
+        q_measured_(T_from_to.rotation()),
+        sqrt_information_(sqrt_info) {}
+
+  template <typename T>
+  bool operator()(const T* p_from_ptr, const T* q_from_ptr, const T* p_to_ptr, const T* q_to_ptr,
+                  T* residuals_ptr) const {
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> p_from(p_from_ptr), p_to(p_to_ptr);
+    const Eigen::Map<const Eigen::Quaternion<T>> q_from(q_from_ptr), q_to(q_to_ptr);
+    const Eigen::Quaternion<T> q_from_inverse = q_from.conjugate();
+    const Eigen::Quaternion<T> q_estimated = q_from_inverse * q_to;
+    const Eigen::Matrix<T, 3, 1> p_estimated = q_from_inverse * (p_to - p_from);
+    const Eigen::Quaternion<T> q_error = q_measured_.template cast<T>() * q_estimated.conjugate();
+    Eigen::Map<Eigen::Matrix<T, 6, 1>> residuals(residuals_ptr);
+    residuals.template head<3>() = p_estimated - p_measured_.template cast<T>();
+    residuals.template tail<3>() = T(2.0) * q_error.vec();
+    residuals.applyOnTheLeft(sqrt_information_.template cast<T>());
+    return true;
+  }
+
+  static ceres::CostFunction* Create(const Eigen::Isometry3d& T_from_to,
+                                     const Eigen::Matrix<double, 6, 6>& sqrt_info) {
+    return new ceres::AutoDiffCostFunction<RelativePoseError, 6, 3, 4, 3, 4>(
+        new RelativePoseError(T_from_to, sqrt_info));
+  }
+
+ private:
+  const Eigen::Vector3d p_measured_;
+  const Eigen::Quaterniond q_measured_;
+  const Eigen::Matrix<double, 6, 6> sqrt_information_;
+};
+
+}  // namespace
+
+bool PoseGraphConfig::IsValid(std::string* why) const {
+  if (!(loop_loss_scale > 0.0) || !(loop_rejection_chi2 > 0.0) || max_iterations < 1 ||
+      threads < 1) {
+    *why =
+        "pose graph: loop_loss_scale and loop_rejection_chi2 must be positive, max_iterations "
+        "and threads >= 1";
+    return false;
+  }
+  return true;
+}
+
+PoseGraph::PoseGraph(const PoseGraphConfig& config) : config_(config) {}
+
+void PoseGraph::AddNode(int id, const Eigen::Isometry3d& T_W_N) {
+  poses_[id] = T_W_N;
+  if (!fixed_set_ && fixed_ < 0) fixed_ = id;
+}
+
+void PoseGraph::SetFixed(int id) {
+  fixed_ = id;
+  fixed_set_ = true;
+}
+
+bool PoseGraph::AddEdge(const PoseGraphEdge& edge, std::string* why) {
+  if (poses_.count(edge.from) == 0 || poses_.count(edge.to) == 0) {
+    *why = "edge " + std::to_string(edge.from) + " -> " + std::to_string(edge.to) +
+           ": unknown node";
+    return false;
+  }
+  const Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(edge.information);
+  if (!edge.information.allFinite() || !edge.information.isApprox(edge.information.transpose()) ||
+      llt.info() != Eigen::Success) {
+    *why = "edge " + std::to_string(edge.from) + " -> " + std::to_string(edge.to) +
+           ": the information matrix is not symmetric positive definite";
+    return false;
+  }
+  edges_.push_back(edge);
+  return true;
+}
+
+namespace {
+
+struct NodeState {
+  Eigen::Vector3d p;
+  Eigen::Quaterniond q;
+};
+
+// The whitened residual of `edge` at the node states, without any loss.
+double WhitenedSquaredError(const PoseGraphEdge& edge, const std::map<int, NodeState>& state) {
+  const NodeState& from = state.at(edge.from);
+  const NodeState& to = state.at(edge.to);
+  const RelativePoseError error(edge.T_from_to, edge.information.llt().matrixU());
+  Eigen::Matrix<double, 6, 1> residual;
+  error(from.p.data(), from.q.coeffs().data(), to.p.data(), to.q.coeffs().data(),
+        residual.data());
+  return residual.squaredNorm();
+}
+
+// One Ceres solve from `poses` with the edges marked active; the optimum in `state`.
+bool SolveGraph(const PoseGraphConfig& config_, const std::map<int, Eigen::Isometry3d>& poses_,
+                const std::vector<PoseGraphEdge>& edges_, int fixed_,
+                const std::vector<bool>& active, std::map<int, NodeState>* state_out,
+                PoseGraphReport* report, std::string* why) {
+  std::map<int, NodeState>& state = *state_out;
+
+  // Ceres works on plain arrays: a position and a quaternion per node.
+  state.clear();
+  for (const auto& [id, T] : poses_) {
+    state[id] = {T.translation(), Eigen::Quaterniond(T.rotation())};
+  }
+
+  ceres::Problem problem;
+  ceres::Manifold* quaternion_manifold = new ceres::EigenQuaternionManifold;
+  for (std::size_t e = 0; e < edges_.size(); ++e) {
+    if (!active[e]) continue;
+    const PoseGraphEdge& edge = edges_[e];
+    const Eigen::Matrix<double, 6, 6> sqrt_info = edge.information.llt().matrixU();
+    ceres::LossFunction* loss =
+        edge.loop ? new ceres::CauchyLoss(config_.loop_loss_scale) : nullptr;
+    NodeState& from = state[edge.from];
+    NodeState& to = state[edge.to];
+    problem.AddResidualBlock(RelativePoseError::Create(edge.T_from_to, sqrt_info), loss,
+                             from.p.data(), from.q.coeffs().data(), to.p.data(),
+                             to.q.coeffs().data());
+  }
+  // Every node is in an edge (Optimize has edges, and AddEdge checks their nodes), except nodes
+  // no edge names: those stay where they are. The problem owns the manifold once it uses it.
+  bool manifold_used = false;
+  for (auto& [id, node] : state) {
+    if (!problem.HasParameterBlock(node.q.coeffs().data())) continue;
+    problem.SetManifold(node.q.coeffs().data(), quaternion_manifold);
+    manifold_used = true;
+  }
+  if (!manifold_used) delete quaternion_manifold;
+  const auto fixed = state.find(fixed_);
+  if (fixed != state.end() && problem.HasParameterBlock(fixed->second.p.data())) {
+    problem.SetParameterBlockConstant(fixed->second.p.data());
+    problem.SetParameterBlockConstant(fixed->second.q.coeffs().data());
+  }
+
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  options.max_num_iterations = config_.max_iterations;
+  options.num_threads = config_.threads;
+  options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  const auto start = std::chrono::steady_clock::now();
+  ceres::Solve(options, &problem, &summary);
+  if (!summary.IsSolutionUsable()) {
+    *why = "Ceres: " + summary.message;
+    return false;
+  }
+  report->converged = summary.termination_type == ceres::CONVERGENCE;
+  report->iterations += static_cast<int>(summary.iterations.size());
+  if (report->initial_cost == 0.0) report->initial_cost = summary.initial_cost;
+  report->final_cost = summary.final_cost;
+  report->solve_ms += std::chrono::duration<double, std::milli>(
+                          std::chrono::steady_clock::now() - start)
+                          .count();
+  return true;
+}
+
+}  // namespace
+
+bool PoseGraph::Optimize(PoseGraphReport* report, std::string* why) {
+  if (!config_.IsValid(why)) return false;
+  *report = PoseGraphReport{};
+  if (poses_.size() < 2 || edges_.empty()) {
+    *why = "the pose graph needs two nodes and an edge";
+    return false;
+  }
+  std::vector<bool> active(edges_.size(), true);
+  for (const PoseGraphEdge& edge : edges_) report->loops += edge.loop ? 1 : 0;
+  // Solve; if a loop still disagrees with the optimum beyond the chi-square bound, it is wrong
+  // (the robust loss has only damped it): drop the worst one and solve again from the start.
+  for (;;) {
+    std::map<int, NodeState> state;
+    if (!SolveGraph(config_, poses_, edges_, fixed_, active, &state, report, why)) return false;
+    int worst = -1;
+    double worst_error = config_.loop_rejection_chi2;
+    for (std::size_t e = 0; e < edges_.size(); ++e) {
+      if (!edges_[e].loop || !active[e]) continue;
+      const double error = WhitenedSquaredError(edges_[e], state);
+      if (error > worst_error) {
+        worst_error = error;
+        worst = static_cast<int>(e);
+      }
+    }
+    if (worst < 0) {
+      for (auto& [id, node] : state) {
+        Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+        T.linear() = node.q.normalized().toRotationMatrix();
+        T.translation() = node.p;
+        poses_[id] = T;
+      }
+      return true;
+    }
+    active[static_cast<std::size_t>(worst)] = false;
+    report->rejected_loops.push_back(worst);
+  }
+}
+
+}  // namespace objmap

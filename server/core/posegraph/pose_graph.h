@@ -1,0 +1,80 @@
+#pragma once
+// Keyframe poses corrected by a pose graph: odometry edges between consecutive keyframes, loop
+// edges between keyframes that see the same place, all SE(3) with an information matrix,
+// optimized with Ceres. Loop edges pass through a robust loss, so a wrong loop (two similar
+// places taken for one) is outweighed by the odometry instead of bending the whole map.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace objmap {
+
+struct PoseGraphConfig {
+  /// Scale of the Cauchy loss on loop edges, in whitened units (standard deviations): loops
+  /// whose residual is well beyond it weigh little.
+  double loop_loss_scale = 10.0;
+  /// A loop whose whitened residual after optimization exceeds this (chi-square, 6 degrees of
+  /// freedom, 99.9 %: 22.46) is reported as rejected.
+  double loop_rejection_chi2 = 22.46;
+  int max_iterations = 100;
+  int threads = 1;
+
+  [[nodiscard]] bool IsValid(std::string* why) const;
+};
+
+/// A relative pose measurement: T_from_to maps `to`'s frame into `from`'s
+/// (T_W_to = T_W_from * T_from_to). Information: the inverse covariance of the error
+/// [translation (m); rotation (rad, small angles)], both in `from`'s frame, translation first.
+struct PoseGraphEdge {
+  int from = 0;
+  int to = 0;
+  Eigen::Isometry3d T_from_to = Eigen::Isometry3d::Identity();
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Identity();
+  bool loop = false;
+};
+
+struct PoseGraphReport {
+  bool converged = false;
+  int iterations = 0;
+  double initial_cost = 0.0;
+  double final_cost = 0.0;
+  double solve_ms = 0.0;
+  int loops = 0;
+  /// Loop edges dropped because they disagreed with the rest of the graph (wrong loops), in the
+  /// order dropped; indices into edges().
+  std::vector<int> rejected_loops;
+};
+
+/// Thread-safety: none.
+class PoseGraph {
+ public:
+  explicit PoseGraph(const PoseGraphConfig& config = {});
+
+  /// A node with its initial pose; an id seen again replaces the pose.
+  void AddNode(int id, const Eigen::Isometry3d& T_W_N);
+  /// False with the reason when a node is unknown or the information matrix is not symmetric
+  /// positive definite.
+  [[nodiscard]] bool AddEdge(const PoseGraphEdge& edge, std::string* why);
+  /// Nodes held where they are (the gauge); by default the first node added.
+  void SetFixed(int id);
+
+  /// Optimizes every node pose but the fixed one (see loop_rejection_chi2 for wrong loops).
+  /// False with the reason when there is nothing to optimize or Ceres fails; poses() are then
+  /// unchanged.
+  [[nodiscard]] bool Optimize(PoseGraphReport* report, std::string* why);
+
+  [[nodiscard]] const std::map<int, Eigen::Isometry3d>& poses() const { return poses_; }
+  [[nodiscard]] const std::vector<PoseGraphEdge>& edges() const { return edges_; }
+
+ private:
+  PoseGraphConfig config_;
+  std::map<int, Eigen::Isometry3d> poses_;
+  std::vector<PoseGraphEdge> edges_;
+  int fixed_ = -1;
+  bool fixed_set_ = false;
+};
+
+}  // namespace objmap
