@@ -267,42 +267,77 @@ MapInputOptions InputOptionsFrom(Arguments& args, const SequenceRunConfig& run_c
   return options;
 }
 
-// Prints how tracking went and, when the input had poses of its own, the estimate's errors
-// against them; writes the estimated trajectory (TUM format).
-bool ReportEstimatedTrajectory(const EstimatedTrajectory& trajectory, bool source_has_poses,
-                               const std::string& path, std::string* why) {
-  std::printf("odometry: %d frames, %d tracked, %d lost, %d relocalized, %.1f ms per frame\n",
-              trajectory.frames, trajectory.frames - trajectory.lost, trajectory.lost,
-              trajectory.relocalized,
-              trajectory.tracking_ms / std::max(1, trajectory.frames));
+// Writes a trajectory in TUM format.
+bool WriteTrajectory(const std::vector<TrajectoryPose>& poses, const std::string& path,
+                     std::string* why) {
+  std::error_code ignored;  // a folder that cannot be made shows as the file not written
+  std::filesystem::create_directories(std::filesystem::path(path).parent_path(), ignored);
   std::ofstream out(path);
   out << "# stamp tx ty tz qx qy qz qw: T_W_C estimated by objmap's RGB-D odometry\n";
   char line[256];
-  for (const TrajectoryPose& pose : trajectory.estimated) {
+  for (const TrajectoryPose& pose : poses) {
     const Eigen::Quaterniond q(pose.T_W_C.linear());
     const Eigen::Vector3d t = pose.T_W_C.translation();
     std::snprintf(line, sizeof(line), "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", pose.stamp_s,
                   t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
     out << line;
   }
-  if (!out) {
-    *why = "cannot write " + path;
-    return false;
-  }
-  if (!source_has_poses) return true;
+  if (!out) *why = "cannot write " + path;
+  return static_cast<bool>(out);
+}
+
+// The score line of `poses` against the input's own, or why there is none.
+std::string ScoreAgainstInput(const std::vector<TrajectoryPose>& poses,
+                              const std::vector<TrajectoryPose>& source) {
   TrajectoryErrors errors;
   std::string reason;
-  if (!EvaluateTrajectory(trajectory.estimated, trajectory.source, TrajectoryEvaluationConfig{},
-                          &errors, &reason)) {
-    std::printf("odometry against the input's poses: not scored (%s)\n", reason.c_str());
-    return true;
+  if (!EvaluateTrajectory(poses, source, TrajectoryEvaluationConfig{}, &errors, &reason)) {
+    return "not scored (" + reason + ")";
   }
+  char text[256];
+  std::snprintf(text, sizeof(text),
+                "ATE RMSE %.4f m (max %.4f) over %zu poses; RPE over 1 m: %.2f %%, %.3f deg/m",
+                errors.ate_rmse_m, errors.ate_max_m, errors.matched,
+                errors.rpe_translation_percent, errors.rpe_rotation_deg_per_m);
+  return text;
+}
+
+// After a run with estimated poses: moves the mapped keyframes to their poses after every loop
+// closure (a pose-graph update, which regenerates the map), prints how tracking went and, when
+// the input had poses of its own, the estimate's errors against them; writes the final
+// trajectory.
+bool FinishEstimatedTrajectory(const EstimatedTrajectory& trajectory, bool source_has_poses,
+                               const SequenceRunReport& report, Mapper* mapper,
+                               const std::string& path, std::string* why) {
   std::printf(
-      "odometry against the input's poses: ATE RMSE %.4f m (max %.4f) over %zu poses; RPE over "
-      "1 m: %.2f %%, %.3f deg/m\n",
-      errors.ate_rmse_m, errors.ate_max_m, errors.matched, errors.rpe_translation_percent,
-      errors.rpe_rotation_deg_per_m);
-  return true;
+      "odometry: %d frames, %d tracked, %d lost, %d relocalized, %d loops closed, %.1f ms per "
+      "frame\n",
+      trajectory.frames, trajectory.frames - trajectory.lost, trajectory.lost,
+      trajectory.relocalized, trajectory.loops_closed,
+      trajectory.tracking_ms / std::max(1, trajectory.frames));
+  const std::vector<TrajectoryPose> final_poses = FinalPoses(trajectory);
+  if (trajectory.loops_closed > 0) {
+    std::map<std::int64_t, Eigen::Isometry3d> by_frame;
+    for (std::size_t i = 0; i < final_poses.size(); ++i) {
+      by_frame[trajectory.frame_index[i]] = final_poses[i].T_W_C;
+    }
+    std::map<KeyframeId, Eigen::Isometry3d> poses;
+    for (const KeyframeReport& keyframe : report.keyframes) {
+      const auto it = by_frame.find(static_cast<std::int64_t>(keyframe.frame_index));
+      if (it != by_frame.end()) poses[keyframe.result.keyframe_id] = it->second;
+    }
+    PoseUpdateReport update;
+    if (!poses.empty() && !mapper->UpdatePoses(poses, why, &update)) return false;
+    std::printf("loop closures: %d keyframes of the map moved, map regenerated\n",
+                update.keyframes_moved);
+  }
+  if (source_has_poses) {
+    std::printf("odometry against the input's poses, as tracked: %s\n",
+                ScoreAgainstInput(trajectory.estimated, trajectory.source).c_str());
+    std::printf("odometry against the input's poses, after loop closures: %s\n",
+                ScoreAgainstInput(final_poses, trajectory.source).c_str());
+  }
+  return WriteTrajectory(final_poses, path, why);
 }
 
 int Fail(const std::string& message) {
@@ -426,6 +461,11 @@ int RunMapCommand(int argc, char** argv) {
       !ApplyCorrectedPoses(args.Get("--corrected-poses", ""), report, &mapper, &why)) {
     return Fail(why);
   }
+  if (input.estimated &&
+      !FinishEstimatedTrajectory(*input.estimated, input.source_has_poses, report, &mapper,
+                                 args.Get("--out", "") + "/trajectory.txt", &why)) {
+    return Fail(why);
+  }
   PrintSummary(mapper, report, wall_s);
 
   const std::string out_dir = args.Get("--out", "");
@@ -435,10 +475,6 @@ int RunMapCommand(int argc, char** argv) {
   }
   if (args.Has("--save-detections") &&
       !WriteDetectionsFile(args.Get("--save-detections", ""), recorder->recorded(), &why)) {
-    return Fail(why);
-  }
-  if (input.estimated && !ReportEstimatedTrajectory(*input.estimated, input.source_has_poses,
-                                                    out_dir + "/trajectory.txt", &why)) {
     return Fail(why);
   }
   std::cout << "wrote " << out_dir << "/map.bt, objects.json, objects/*.ply, timings.csv"

@@ -27,6 +27,18 @@ class OdometryStream : public FrameStream {
         frame->stamp_s > 0.0 ? frame->stamp_s : static_cast<double>(frame->frame_index) / 30.0;
     log_->source.push_back({stamp, frame->T_W_C});
     log_->estimated.push_back({stamp, report.T_W_C});
+    log_->loops_closed += report.loops_closed;
+    if (report.loops_closed > 0 ||
+        static_cast<int>(log_->keyframe_poses.size()) < odometry_.num_keyframes()) {
+      log_->keyframe_poses.resize(static_cast<std::size_t>(odometry_.num_keyframes()));
+      for (int k = 0; k < odometry_.num_keyframes(); ++k) {
+        log_->keyframe_poses[static_cast<std::size_t>(k)] = odometry_.KeyframePose(k);
+      }
+    }
+    log_->frame_index.push_back(frame->frame_index);
+    log_->reference_keyframe.push_back(report.reference_keyframe);
+    log_->T_K_C.push_back(odometry_.KeyframePose(report.reference_keyframe).inverse() *
+                          report.T_W_C);
     frame->T_W_C = report.T_W_C;
     return FrameStatus::kFrame;
   }
@@ -41,6 +53,16 @@ class OdometryStream : public FrameStream {
 };
 
 }  // namespace
+
+std::vector<TrajectoryPose> FinalPoses(const EstimatedTrajectory& trajectory) {
+  std::vector<TrajectoryPose> poses = trajectory.estimated;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    poses[i].T_W_C =
+        trajectory.keyframe_poses[static_cast<std::size_t>(trajectory.reference_keyframe[i])] *
+        trajectory.T_K_C[i];
+  }
+  return poses;
+}
 
 std::unique_ptr<FrameStream> WithEstimatedPoses(std::unique_ptr<FrameStream> inner,
                                                 const OdometryConfig& config,

@@ -2,6 +2,7 @@
 // A frame stream whose poses come from RgbdOdometry: how a camera, a recording or a sequence
 // without (or ignoring) its own poses gets them.
 
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -20,8 +21,19 @@ struct EstimatedTrajectory {
   int frames = 0;
   int lost = 0;
   int relocalized = 0;
+  int loops_closed = 0;
   double tracking_ms = 0.0;  ///< in all
+  /// Per tracked frame: its index in the source, the keyframe it was tracked against and its
+  /// pose relative to that keyframe; and every keyframe's latest pose (loop closures move them).
+  std::vector<std::int64_t> frame_index;
+  std::vector<int> reference_keyframe;
+  std::vector<Eigen::Isometry3d> T_K_C;
+  std::vector<Eigen::Isometry3d> keyframe_poses;
 };
+
+/// Every tracked frame's pose after all the loop closures so far: its keyframe's latest pose
+/// times its pose relative to it (`estimated` holds the poses as they were when tracked).
+[[nodiscard]] std::vector<TrajectoryPose> FinalPoses(const EstimatedTrajectory& trajectory);
 
 /// Frames of `inner` with T_W_C replaced by the odometry's estimate (the world frame is the first
 /// tracked frame's camera frame). A frame the odometry cannot track is a kBadFrame whose reason

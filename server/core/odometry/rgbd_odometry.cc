@@ -1,5 +1,7 @@
 #include "odometry/rgbd_odometry.h"
 
+#include "posegraph/pose_graph.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -113,7 +115,87 @@ struct RgbdOdometry::Impl {
   PoseFit Fit(const FrameFeatures& features, const Keyframe& keyframe,
               const CameraIntrinsics& K) ;
   void AddKeyframe(const FrameFeatures& features, const Eigen::Isometry3d& T_W_C);
+
+  // Pose graph over the keyframes: an odometry edge from each keyframe to the one it was
+  // tracked from, loop edges to older keyframes that see the same place.
+  std::vector<PoseGraphEdge> edges;
+  int loops_closed = 0;
+  void AddOdometryEdge(int from, int to);
+  // Tries the older keyframes near the newest one; for each that tracks it (PnP, enough
+  // inliers), a loop edge; then optimizes the graph and moves every keyframe. Returns the loops
+  // kept.
+  int CloseLoops(const FrameFeatures& features, const CameraIntrinsics& K);
 };
+
+Eigen::Matrix<double, 6, 6> EdgeInformation(double sigma_m, double sigma_rad) {
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
+  information.diagonal() << Eigen::Vector3d::Constant(1.0 / (sigma_m * sigma_m)),
+      Eigen::Vector3d::Constant(1.0 / (sigma_rad * sigma_rad));
+  return information;
+}
+
+void RgbdOdometry::Impl::AddOdometryEdge(int from, int to) {
+  PoseGraphEdge edge;
+  edge.from = from;
+  edge.to = to;
+  edge.T_from_to = keyframes[static_cast<std::size_t>(from)].T_W_K.inverse() *
+                   keyframes[static_cast<std::size_t>(to)].T_W_K;
+  edge.information = EdgeInformation(config.edge_sigma_m, config.edge_sigma_deg / kDegPerRad);
+  edges.push_back(edge);
+}
+
+int RgbdOdometry::Impl::CloseLoops(const FrameFeatures& features, const CameraIntrinsics& K) {
+  if (config.loop_candidates <= 0) return 0;
+  const int newest = static_cast<int>(keyframes.size()) - 1;
+  const Eigen::Isometry3d T_W_new = keyframes.back().T_W_K;
+  std::vector<std::pair<double, int>> near;
+  for (int k = 0; k + config.loop_min_keyframe_gap <= newest; ++k) {
+    const Eigen::Isometry3d offset = keyframes[static_cast<std::size_t>(k)].T_W_K.inverse() * T_W_new;
+    if (offset.translation().norm() <= config.loop_search_radius_m &&
+        AngleDeg(offset.linear()) <= config.loop_search_angle_deg) {
+      near.emplace_back(offset.translation().norm(), k);
+    }
+  }
+  std::sort(near.begin(), near.end());
+  int added = 0;
+  for (std::size_t c = 0; c < near.size() && static_cast<int>(c) < config.loop_candidates; ++c) {
+    const int k = near[c].second;
+    const Keyframe& old = keyframes[static_cast<std::size_t>(k)];
+    const PoseFit fit = Fit(features, old, K);
+    if (!fit.ok || fit.inliers < config.loop_min_inliers) continue;
+    PoseGraphEdge loop;
+    loop.from = k;
+    loop.to = newest;
+    loop.T_from_to = old.T_W_K.inverse() * fit.T_W_C;
+    loop.information = EdgeInformation(config.edge_sigma_m, config.edge_sigma_deg / kDegPerRad);
+    loop.loop = true;
+    edges.push_back(loop);
+    ++added;
+  }
+  if (added == 0) return 0;
+  PoseGraph graph;
+  for (int k = 0; k <= newest; ++k) graph.AddNode(k, keyframes[static_cast<std::size_t>(k)].T_W_K);
+  std::string why;
+  for (const PoseGraphEdge& edge : edges) {
+    if (!graph.AddEdge(edge, &why)) return 0;
+  }
+  PoseGraphReport report;
+  if (!graph.Optimize(&report, &why)) return 0;
+  // Wrong loops stay out of later solves.
+  std::vector<bool> dropped(edges.size(), false);
+  for (int e : report.rejected_loops) dropped[static_cast<std::size_t>(e)] = true;
+  std::vector<PoseGraphEdge> kept;
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    if (!dropped[e]) kept.push_back(edges[e]);
+  }
+  const int kept_loops = added - static_cast<int>(std::count_if(
+                                     report.rejected_loops.begin(), report.rejected_loops.end(),
+                                     [&](int e) { return edges[static_cast<std::size_t>(e)].to == newest; }));
+  edges = std::move(kept);
+  for (const auto& [k, pose] : graph.poses()) keyframes[static_cast<std::size_t>(k)].T_W_K = pose;
+  loops_closed += kept_loops;
+  return kept_loops;
+}
 
 bool RgbdOdometry::Impl::Extract(const RgbdFrame& frame, FrameFeatures* features,
                                  std::string* why) {
@@ -333,10 +415,24 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
     return finish();
   }
   if (with_depth >= config.min_inliers) {
+    const int reference_keyframe = impl.current_keyframe;
     impl.AddKeyframe(features, fit.T_W_C);
     report.new_keyframe = true;
+    report.reference_keyframe = impl.current_keyframe;
+    impl.AddOdometryEdge(reference_keyframe, impl.current_keyframe);
+    report.loops_closed = impl.CloseLoops(features, frame.intrinsics);
+    if (report.loops_closed > 0) {
+      report.T_W_C = impl.keyframes.back().T_W_K;
+      impl.last_T_W_C = report.T_W_C;
+    }
   }
   return finish();
 }
+
+Eigen::Isometry3d RgbdOdometry::KeyframePose(int keyframe) const {
+  return impl_->keyframes.at(static_cast<std::size_t>(keyframe)).T_W_K;
+}
+
+int RgbdOdometry::loops_closed() const { return impl_->loops_closed; }
 
 }  // namespace objmap

@@ -35,6 +35,19 @@ struct OdometryConfig {
   double keyframe_distance_m = 0.1;
   double keyframe_angle_deg = 10.0;
   int keyframe_min_inliers = 100;
+  /// Loop closure: when a keyframe is added, up to loop_candidates keyframes at least
+  /// loop_min_keyframe_gap older, within loop_search_radius_m and loop_search_angle_deg of it,
+  /// are matched to it; each with loop_min_inliers PnP inliers adds a loop edge, and the pose
+  /// graph of the keyframes (PoseGraph) is optimized and every keyframe moved. 0 candidates: no
+  /// loop closure.
+  int loop_candidates = 3;
+  int loop_min_keyframe_gap = 10;
+  double loop_search_radius_m = 1.0;
+  double loop_search_angle_deg = 45.0;
+  int loop_min_inliers = 60;
+  /// Standard deviations of a keyframe-to-keyframe measurement (odometry and loop edges).
+  double edge_sigma_m = 0.01;
+  double edge_sigma_deg = 0.5;
   /// Keyframes tried, nearest to the last pose first, when tracking against the current one
   /// fails (relocalisation).
   int relocalisation_keyframes = 8;
@@ -58,7 +71,8 @@ struct TrackingReport {
   int inliers = 0;         ///< of PnP RANSAC
   double reprojection_rmse_px = 0.0;  ///< of the PnP inliers, after least squares
   int reference_keyframe = -1;        ///< index of the keyframe tracked against
-  bool new_keyframe = false;          ///< this frame became a keyframe
+  bool new_keyframe = false;          ///< this frame became a keyframe (reference_keyframe)
+  int loops_closed = 0;               ///< loop edges added with it (every keyframe then moved)
   double ms = 0.0;                    ///< time spent
   std::string why;                    ///< kLost: the reason
 };
@@ -77,6 +91,9 @@ class RgbdOdometry {
   TrackingReport Track(const RgbdFrame& frame);
 
   [[nodiscard]] int num_keyframes() const;
+  /// The keyframe's current pose (moved by every loop closure).
+  [[nodiscard]] Eigen::Isometry3d KeyframePose(int keyframe) const;
+  [[nodiscard]] int loops_closed() const;
 
  private:
   struct Impl;
