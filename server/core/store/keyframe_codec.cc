@@ -49,9 +49,13 @@ bool EncodePng(const cv::Mat& image, Bytes* png, std::string* why) {
   return false;
 }
 
-// Decodes with `flags` and checks type and size; never throws.
-bool DecodeImage(const std::uint8_t* data, std::size_t bytes, int flags, int type, int width,
-                 int height, cv::Mat* image, std::string* why) {
+enum class BlobFormat { kPng, kJpeg };
+
+// Decodes with `flags` and checks type and size; never throws. Only a blob with a header of
+// `format` reaches the decoder: cv::imdecode guesses the format from the bytes, and some of the
+// decoders it would pick for a damaged blob abort the process (gdcm's DICOM reader asserts).
+bool DecodeImage(const std::uint8_t* data, std::size_t bytes, BlobFormat format, int flags,
+                 int type, int width, int height, cv::Mat* image, std::string* why) {
   if (bytes == 0) {
     *why = "empty image blob";
     return false;
@@ -60,9 +64,15 @@ bool DecodeImage(const std::uint8_t* data, std::size_t bytes, int flags, int typ
   // (gigabytes) before its size is compared.
   const std::string_view blob(reinterpret_cast<const char*>(data), bytes);
   int header_width = 0, header_height = 0;
-  if ((ReadPngSize(blob, &header_width, &header_height) ||
-       ReadJpegSize(blob, &header_width, &header_height)) &&
-      (header_width != width || header_height != height)) {
+  const bool has_header = format == BlobFormat::kPng
+                              ? ReadPngSize(blob, &header_width, &header_height)
+                              : ReadJpegSize(blob, &header_width, &header_height);
+  if (!has_header) {
+    *why = std::string("image blob is not a ") + (format == BlobFormat::kPng ? "PNG" : "JPEG") +
+           " image";
+    return false;
+  }
+  if (header_width != width || header_height != height) {
     *why = "image blob is " + std::to_string(header_width) + "x" + std::to_string(header_height) +
            ", its keyframe " + std::to_string(width) + "x" + std::to_string(height);
     return false;
@@ -111,7 +121,8 @@ bool EncodeColorJpeg(const ColorImage& color, int quality, Bytes* jpeg, std::str
 bool DecodeDepthPng(const std::uint8_t* png, std::size_t bytes, int width, int height,
                     std::vector<std::uint16_t>* depth_mm, std::string* why) {
   cv::Mat image;
-  if (!DecodeImage(png, bytes, cv::IMREAD_UNCHANGED, CV_16UC1, width, height, &image, why)) {
+  if (!DecodeImage(png, bytes, BlobFormat::kPng, cv::IMREAD_UNCHANGED, CV_16UC1, width, height,
+                   &image, why)) {
     return false;
   }
   depth_mm->resize(static_cast<std::size_t>(width) * height);
@@ -125,7 +136,8 @@ bool DecodeDepthPng(const std::uint8_t* png, std::size_t bytes, int width, int h
 bool DecodeMaskPng(const std::uint8_t* png, std::size_t bytes, int width, int height,
                    std::vector<std::uint8_t>* mask, std::string* why) {
   cv::Mat image;
-  if (!DecodeImage(png, bytes, cv::IMREAD_UNCHANGED, CV_8UC1, width, height, &image, why)) {
+  if (!DecodeImage(png, bytes, BlobFormat::kPng, cv::IMREAD_UNCHANGED, CV_8UC1, width, height,
+                   &image, why)) {
     return false;
   }
   mask->resize(static_cast<std::size_t>(width) * height);
@@ -138,7 +150,8 @@ bool DecodeMaskPng(const std::uint8_t* png, std::size_t bytes, int width, int he
 bool DecodeColorJpeg(const std::uint8_t* jpeg, std::size_t bytes, int width, int height,
                      ColorImage* color, std::string* why) {
   cv::Mat bgr;
-  if (!DecodeImage(jpeg, bytes, cv::IMREAD_COLOR, CV_8UC3, width, height, &bgr, why)) {
+  if (!DecodeImage(jpeg, bytes, BlobFormat::kJpeg, cv::IMREAD_COLOR, CV_8UC3, width, height,
+                   &bgr, why)) {
     return false;
   }
   color->width = width;
