@@ -267,25 +267,6 @@ MapInputOptions InputOptionsFrom(Arguments& args, const SequenceRunConfig& run_c
   return options;
 }
 
-// Writes a trajectory in TUM format.
-bool WriteTrajectory(const std::vector<TrajectoryPose>& poses, const std::string& path,
-                     std::string* why) {
-  std::error_code ignored;  // a folder that cannot be made shows as the file not written
-  std::filesystem::create_directories(std::filesystem::path(path).parent_path(), ignored);
-  std::ofstream out(path);
-  out << "# stamp tx ty tz qx qy qz qw: T_W_C estimated by objmap's RGB-D odometry\n";
-  char line[256];
-  for (const TrajectoryPose& pose : poses) {
-    const Eigen::Quaterniond q(pose.T_W_C.linear());
-    const Eigen::Vector3d t = pose.T_W_C.translation();
-    std::snprintf(line, sizeof(line), "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", pose.stamp_s,
-                  t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
-    out << line;
-  }
-  if (!out) *why = "cannot write " + path;
-  return static_cast<bool>(out);
-}
-
 // The score line of `poses` against the input's own, or why there is none.
 std::string ScoreAgainstInput(const std::vector<TrajectoryPose>& poses,
                               const std::vector<TrajectoryPose>& source) {
@@ -337,7 +318,11 @@ bool FinishEstimatedTrajectory(const EstimatedTrajectory& trajectory, bool sourc
     std::printf("odometry against the input's poses, after loop closures: %s\n",
                 ScoreAgainstInput(final_poses, trajectory.source).c_str());
   }
-  return WriteTrajectory(final_poses, path, why);
+  std::error_code ignored;  // a folder that cannot be made shows as the file not written
+  std::filesystem::create_directories(std::filesystem::path(path).parent_path(), ignored);
+  return WriteTumTrajectory(path, final_poses,
+                            "stamp tx ty tz qx qy qz qw: T_W_C estimated by objmap's RGB-D odometry",
+                            why);
 }
 
 int Fail(const std::string& message) {

@@ -6,11 +6,11 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <string>
 #include <vector>
 
 #include "dataset/sequence_reader.h"
+#include "dataset/trajectory.h"
 #include "evaluation/trajectory_evaluation.h"
 #include "odometry/rgbd_odometry.h"
 
@@ -69,15 +69,11 @@ int main(int argc, char** argv) {
   for (std::size_t i = 0; i < corrected.size(); ++i) {
     corrected[i].T_W_C = odometry.KeyframePose(relative[i].first) * relative[i].second;
   }
-  std::ofstream file(out);
-  file << "# stamp tx ty tz qx qy qz qw (RgbdOdometry, " << reader->Describe() << ")\n";
-  for (const TrajectoryPose& pose : estimated) {
-    const Eigen::Quaterniond q(pose.T_W_C.linear());
-    const Eigen::Vector3d t = pose.T_W_C.translation();
-    char line[256];
-    std::snprintf(line, sizeof(line), "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", pose.stamp_s,
-                  t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
-    file << line;
+  if (!WriteTumTrajectory(out, estimated,
+                          "stamp tx ty tz qx qy qz qw (RgbdOdometry, " + reader->Describe() + ")",
+                          &why)) {
+    std::fprintf(stderr, "odometry_bench: %s\n", why.c_str());
+    return 1;
   }
   double sum = 0.0;
   for (double value : ms) sum += value;

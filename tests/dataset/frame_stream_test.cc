@@ -140,5 +140,24 @@ TEST_F(FrameStreamTest, MalformedTrajectoryLineIsNamed) {
   EXPECT_NE(why.find("absent.txt: missing"), std::string::npos) << why;
 }
 
+TEST_F(FrameStreamTest, WrittenTrajectoriesReadBackAsWritten) {
+  std::vector<TrajectoryPose> poses(2);
+  poses[0].stamp_s = 12.5;
+  poses[0].T_W_C.translation() = Eigen::Vector3d(1.0, -2.0, 0.5);
+  poses[1].stamp_s = 12.6;
+  poses[1].T_W_C.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()).matrix();
+  std::string why;
+  ASSERT_TRUE(WriteTumTrajectory(Path("written.txt"), poses, "two poses", &why)) << why;
+  std::vector<TrajectoryPose> read;
+  ASSERT_TRUE(ReadTumTrajectory(Path("written.txt"), &read, &why)) << why;
+  ASSERT_EQ(read.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_NEAR(read[i].stamp_s, poses[i].stamp_s, 1e-6);
+    EXPECT_TRUE(read[i].T_W_C.isApprox(poses[i].T_W_C, 1e-6));
+  }
+  EXPECT_FALSE(WriteTumTrajectory(Path("absent/dir/x.txt"), poses, "", &why));
+  EXPECT_NE(why.find("cannot write"), std::string::npos) << why;
+}
+
 }  // namespace
 }  // namespace objmap

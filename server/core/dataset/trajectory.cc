@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 
@@ -80,6 +81,22 @@ class TrajectoryStream : public FrameStream {
 };
 
 }  // namespace
+
+bool WriteTumTrajectory(const std::string& path, const std::vector<TrajectoryPose>& poses,
+                        const std::string& comment, std::string* why) {
+  std::ofstream out(path);
+  out << "# " << comment << "\n";
+  char line[256];
+  for (const TrajectoryPose& pose : poses) {
+    const Eigen::Quaterniond q(pose.T_W_C.linear());
+    const Eigen::Vector3d t = pose.T_W_C.translation();
+    std::snprintf(line, sizeof(line), "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", pose.stamp_s,
+                  t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+    out << line;
+  }
+  if (!out) *why = "cannot write " + path;
+  return static_cast<bool>(out);
+}
 
 bool ReadTumTrajectory(const std::string& path, std::vector<TrajectoryPose>* poses,
                        std::string* why) {

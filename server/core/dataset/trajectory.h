@@ -19,6 +19,12 @@ namespace objmap {
 [[nodiscard]] bool ReadTumTrajectory(const std::string& path, std::vector<TrajectoryPose>* poses,
                                      std::string* why);
 
+/// Writes `poses` as a TUM trajectory (the lines ReadTumTrajectory reads) after a `# comment`
+/// line. False with "cannot write PATH" when the file cannot be written.
+[[nodiscard]] bool WriteTumTrajectory(const std::string& path,
+                                      const std::vector<TrajectoryPose>& poses,
+                                      const std::string& comment, std::string* why);
+
 /// How frames are matched to trajectory poses.
 struct TrajectoryMatchConfig {
   /// Largest |frame stamp - pose stamp| for the nearest pose to be taken, seconds.
