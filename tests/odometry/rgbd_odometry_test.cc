@@ -13,6 +13,7 @@
 
 #include "dataset/sequence_reader.h"
 #include "evaluation/trajectory_evaluation.h"
+#include "odometry/odometry_stream.h"
 #include "test_data.h"
 
 namespace objmap {
@@ -162,26 +163,18 @@ TEST(RgbdOdometry, ALoopBackToTheStartPullsTheTrajectoryIn) {
   ASSERT_NE(reader, nullptr) << why;
   // The first 300 frames come back past where they started (measured 2026-12-04: one loop,
   // ATE 2.69 cm as tracked, 2.37 cm with every frame on its keyframe's final pose).
-  RgbdOdometry odometry{OdometryConfig{}};
-  std::vector<TrajectoryPose> tracked, reference;
-  std::vector<std::pair<int, Eigen::Isometry3d>> relative;
-  for (std::size_t i = 0; i < 300; ++i) {
-    const RgbdFrame frame = ReadFrame(*reader, i);
-    const TrackingReport report = odometry.Track(frame);
-    ASSERT_NE(report.status, TrackingStatus::kLost) << "frame " << i << ": " << report.why;
-    tracked.push_back({i / 30.0, report.T_W_C});
-    reference.push_back({i / 30.0, frame.T_W_C});
-    relative.emplace_back(report.reference_keyframe,
-                          odometry.KeyframePose(report.reference_keyframe).inverse() * report.T_W_C);
+  auto log = std::make_shared<EstimatedTrajectory>();
+  auto stream = WithEstimatedPoses(MakeSequenceStream(*reader, 0, 300), OdometryConfig{}, log);
+  RgbdFrame frame;
+  FrameStatus status;
+  while ((status = stream->Next(&frame, &why)) == FrameStatus::kFrame) {
   }
-  EXPECT_GE(odometry.loops_closed(), 1);
-  std::vector<TrajectoryPose> final_poses = tracked;
-  for (std::size_t i = 0; i < final_poses.size(); ++i) {
-    final_poses[i].T_W_C = odometry.KeyframePose(relative[i].first) * relative[i].second;
-  }
+  ASSERT_EQ(status, FrameStatus::kEnded) << why;
+  ASSERT_EQ(log->lost, 0);
+  EXPECT_GE(log->loops_closed, 1);
   TrajectoryErrors as_tracked, after;
-  ASSERT_TRUE(EvaluateTrajectory(tracked, reference, {}, &as_tracked, &why)) << why;
-  ASSERT_TRUE(EvaluateTrajectory(final_poses, reference, {}, &after, &why)) << why;
+  ASSERT_TRUE(EvaluateTrajectory(log->estimated, log->source, {}, &as_tracked, &why)) << why;
+  ASSERT_TRUE(EvaluateTrajectory(FinalPoses(*log), log->source, {}, &after, &why)) << why;
   EXPECT_LT(after.ate_rmse_m, as_tracked.ate_rmse_m);
   EXPECT_LT(after.ate_rmse_m, 0.03);
 }
