@@ -1,5 +1,6 @@
 #include "odometry/rgbd_odometry.h"
 
+#include "odometry/depth_alignment.h"
 #include "posegraph/pose_graph.h"
 
 #include <algorithm>
@@ -27,6 +28,8 @@ struct FrameFeatures {
   cv::Mat descriptors;                  // one row per keypoint
   std::vector<cv::Point3f> points_C;    // per keypoint; valid[i] says whether it has one
   std::vector<std::uint8_t> valid;
+  DepthGrid coarse_depth;  // for the dense refinement (empty without it)
+  DepthGrid fine_depth;
 };
 
 // A frame that later frames are tracked against: only its keypoints with a 3D point.
@@ -34,6 +37,8 @@ struct Keyframe {
   Eigen::Isometry3d T_W_K = Eigen::Isometry3d::Identity();
   std::vector<cv::Point3f> points_K;
   cv::Mat descriptors;
+  DepthGrid coarse_depth;
+  DepthGrid fine_depth;
 };
 
 // What PnP found for a frame against one keyframe.
@@ -43,6 +48,8 @@ struct PoseFit {
   int matches = 0;
   int inliers = 0;
   double rmse_px = 0.0;
+  bool depth_refined = false;
+  double depth_rmse_m = 0.0;
   std::string why;
 };
 
@@ -80,6 +87,16 @@ bool OdometryConfig::IsValid(std::string* why) const {
         "min_inliers and relocalisation_keyframes >= 0";
     return false;
   }
+  if (depth_refinement &&
+      (depth_refinement_coarse_step < 1 || depth_refinement_fine_step < 1 ||
+       depth_refinement_coarse_iterations < 0 || depth_refinement_fine_iterations < 1 ||
+       depth_refinement_min_correspondences < 6 || !(depth_refinement_max_correction_m > 0.0) ||
+       !(depth_refinement_max_correction_deg > 0.0))) {
+    *why =
+        "odometry: depth_refinement needs steps >= 1, coarse iterations >= 0, fine iterations "
+        ">= 1, min_correspondences >= 6 and positive correction limits";
+    return false;
+  }
   return true;
 }
 
@@ -115,6 +132,9 @@ struct RgbdOdometry::Impl {
   PoseFit Fit(const FrameFeatures& features, const Keyframe& keyframe,
               const CameraIntrinsics& K) ;
   void AddKeyframe(const FrameFeatures& features, const Eigen::Isometry3d& T_W_C);
+  // Dense step after PnP: moves T_K_C when the depth alignment succeeds within the limits.
+  void RefineByDepth(const FrameFeatures& features, const Keyframe& keyframe,
+                     Eigen::Isometry3d* T_K_C, PoseFit* fit) const;
 
   // Pose graph over the keyframes: an odometry edge from each keyframe to the one it was
   // tracked from, loop edges to older keyframes that see the same place.
@@ -227,6 +247,12 @@ bool RgbdOdometry::Impl::Extract(const RgbdFrame& frame, FrameFeatures* features
                                         static_cast<float>((p.y - K.cy) * z / K.fy), z);
     features->valid[i] = 1;
   }
+  if (config.depth_refinement) {
+    features->coarse_depth =
+        MakeDepthGrid(frame.depth, K, config.depth_refinement_coarse_step, config.max_depth_m);
+    features->fine_depth =
+        MakeDepthGrid(frame.depth, K, config.depth_refinement_fine_step, config.max_depth_m);
+  }
   return true;
 }
 
@@ -234,6 +260,8 @@ void RgbdOdometry::Impl::AddKeyframe(const FrameFeatures& features,
                                      const Eigen::Isometry3d& T_W_C) {
   Keyframe keyframe;
   keyframe.T_W_K = T_W_C;
+  keyframe.coarse_depth = features.coarse_depth;
+  keyframe.fine_depth = features.fine_depth;
   for (std::size_t i = 0; i < features.keypoints.size(); ++i) {
     if (!features.valid[i]) continue;
     keyframe.points_K.push_back(features.points_C[i]);
@@ -241,6 +269,34 @@ void RgbdOdometry::Impl::AddKeyframe(const FrameFeatures& features,
   }
   keyframes.push_back(std::move(keyframe));
   current_keyframe = static_cast<int>(keyframes.size()) - 1;
+}
+
+void RgbdOdometry::Impl::RefineByDepth(const FrameFeatures& features, const Keyframe& keyframe,
+                                       Eigen::Isometry3d* T_K_C, PoseFit* fit) const {
+  std::vector<const DepthGrid*> model_levels, frame_levels;
+  std::vector<DepthAlignmentLevel> levels;
+  if (config.depth_refinement_coarse_iterations > 0) {
+    model_levels.push_back(&keyframe.coarse_depth);
+    frame_levels.push_back(&features.coarse_depth);
+    levels.push_back({config.depth_refinement_coarse_iterations, 0.08, 0.03});
+  }
+  model_levels.push_back(&keyframe.fine_depth);
+  frame_levels.push_back(&features.fine_depth);
+  levels.push_back({config.depth_refinement_fine_iterations, 0.03, 0.01});
+  Eigen::Isometry3d refined = *T_K_C;
+  DepthAlignmentReport report;
+  if (!AlignDepth(model_levels, frame_levels, levels, config.depth_refinement_min_correspondences,
+                  &refined, &report)) {
+    return;
+  }
+  const Eigen::Isometry3d correction = T_K_C->inverse() * refined;
+  if (correction.translation().norm() > config.depth_refinement_max_correction_m ||
+      AngleDeg(correction.linear()) > config.depth_refinement_max_correction_deg) {
+    return;
+  }
+  *T_K_C = refined;
+  fit->depth_refined = true;
+  fit->depth_rmse_m = report.rmse_m;
 }
 
 PoseFit RgbdOdometry::Impl::Fit(const FrameFeatures& features, const Keyframe& keyframe,
@@ -268,10 +324,17 @@ PoseFit RgbdOdometry::Impl::Fit(const FrameFeatures& features, const Keyframe& k
   const cv::Matx33d camera(K.fx, 0, K.cx, 0, K.fy, K.cy, 0, 0, 1);
   cv::Mat rvec, tvec;
   std::vector<int> inliers;
+  // RANSAC draws from OpenCV's per-thread generator: a fixed seed per fit makes the trajectory
+  // the same whichever thread tracks and whatever ran on it before (reproducible runs and
+  // tests); the caller's generator state is given back.
+  cv::RNG& generator = cv::theRNG();
+  const std::uint64_t caller_state = generator.state;
+  generator.state = 0x9E3779B97F4A7C15ull;
   const bool solved = cv::solvePnPRansac(
       object_points, image_points, camera, cv::noArray(), rvec, tvec, false,
       config.ransac_iterations, static_cast<float>(config.ransac_reprojection_px), 0.999,
       inliers, cv::SOLVEPNP_EPNP);
+  generator.state = caller_state;
   fit.inliers = static_cast<int>(inliers.size());
   if (!solved || fit.inliers < config.min_inliers) {
     fit.why = std::to_string(fit.inliers) + " PnP inliers of " + std::to_string(fit.matches) +
@@ -295,8 +358,9 @@ PoseFit RgbdOdometry::Impl::Fit(const FrameFeatures& features, const Keyframe& k
   }
   fit.rmse_px = std::sqrt(sum_sq / static_cast<double>(std::max<std::size_t>(1, projected.size())));
   // PnP maps keyframe points into this camera: T_C_K.
-  const Eigen::Isometry3d T_C_K = FromRvecTvec(rvec, tvec);
-  fit.T_W_C = keyframe.T_W_K * T_C_K.inverse();
+  Eigen::Isometry3d T_K_C = FromRvecTvec(rvec, tvec).inverse();
+  if (config.depth_refinement) RefineByDepth(features, keyframe, &T_K_C, &fit);
+  fit.T_W_C = keyframe.T_W_K * T_K_C;
   fit.ok = true;
   return fit;
 }
@@ -306,6 +370,27 @@ RgbdOdometry::RgbdOdometry(const OdometryConfig& config)
 RgbdOdometry::~RgbdOdometry() = default;
 RgbdOdometry::RgbdOdometry(RgbdOdometry&&) noexcept = default;
 RgbdOdometry& RgbdOdometry::operator=(RgbdOdometry&&) noexcept = default;
+
+bool RgbdOdometry::StartFromKnownPose(const RgbdFrame& frame, std::string* why) {
+  Impl& impl = *impl_;
+  if (!impl.keyframes.empty()) {
+    *why = "tracking has already started";
+    return false;
+  }
+  FrameFeatures features;
+  if (!impl.Extract(frame, &features, why)) return false;
+  const int with_depth = static_cast<int>(
+      std::count(features.valid.begin(), features.valid.end(), std::uint8_t{1}));
+  if (with_depth < impl.config.min_inliers) {
+    *why = std::to_string(with_depth) + " keypoints with depth, " +
+           std::to_string(impl.config.min_inliers) + " needed to start";
+    return false;
+  }
+  impl.AddKeyframe(features, frame.T_W_C);
+  impl.has_last = true;
+  impl.last_T_W_C = frame.T_W_C;
+  return true;
+}
 
 int RgbdOdometry::num_keyframes() const { return static_cast<int>(impl_->keyframes.size()); }
 
@@ -400,6 +485,8 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
   report.matches = fit.matches;
   report.inliers = fit.inliers;
   report.reprojection_rmse_px = fit.rmse_px;
+  report.depth_refined = fit.depth_refined;
+  report.depth_rmse_m = fit.depth_rmse_m;
   impl.has_last = true;
   impl.last_T_W_C = fit.T_W_C;
 
