@@ -58,14 +58,16 @@ constexpr char kMapUsage[] =
     "  --max-frames N            number of frames to read (default: all)\n"
     "  --trajectory FILE         camera / recording: poses, TUM lines `stamp tx ty tz qx qy qz\n"
     "                            qw` (T_W_C), the nearest in stamp taken; frames without one\n"
-    "                            are skipped. Without it the camera is static at the identity\n"
-    "                            pose\n"
+    "                            are skipped. Without it the poses are estimated\n"
+    "                            (--poses auto)\n"
     "  --trajectory-tolerance S  largest frame/pose stamp difference, seconds (default 0.02)\n"
-    "  --poses SOURCE            input: the input's poses (a dataset's, a bag's, --trajectory);\n"
+    "  --poses SOURCE            input: the input's poses (a dataset's, a bag's, --trajectory;\n"
+    "                            a camera without --trajectory is static at the identity);\n"
     "                            estimate: tracked by RGB-D odometry from the frames alone\n"
     "                            (frames it cannot track are skipped with the reason); with a\n"
     "                            dataset, the estimate is scored against its poses (ATE, RPE)\n"
-    "                            and written to <out>/trajectory.txt (default: input)\n"
+    "                            and written to <out>/trajectory.txt; auto (default): estimate\n"
+    "                            for a camera or .oni without --trajectory, else input\n"
     "  --min-translation M       keyframe after this much motion, metres (keyframes section)\n"
     "  --min-rotation DEG        keyframe after this much rotation, degrees (keyframes section)\n"
     "  --every-frame             every frame is a keyframe\n"
@@ -258,11 +260,12 @@ MapInputOptions InputOptionsFrom(Arguments& args, const SequenceRunConfig& run_c
   options.trajectory_path = args.Get("--trajectory", "");
   options.trajectory_match.max_stamp_difference_s =
       args.GetNumber("--trajectory-tolerance", options.trajectory_match.max_stamp_difference_s);
-  const std::string poses = args.Get("--poses", "input");
-  if (poses != "input" && poses != "estimate") {
-    args.SetError("--poses must be input or estimate, not " + poses);
+  const std::string poses = args.Get("--poses", "auto");
+  if (poses != "auto" && poses != "input" && poses != "estimate") {
+    args.SetError("--poses must be auto, input or estimate, not " + poses);
   }
   options.estimate_poses = poses == "estimate";
+  options.estimate_missing_poses = poses == "auto";
   BagOptionsFrom(args, &options);
   return options;
 }

@@ -19,10 +19,14 @@ bool IsOpenNI2Argument(const std::string& argument) {
          EndsWith(argument, ".oni");
 }
 
-// Gives a camera or recording its poses: from the trajectory file, or none (identity).
+// Gives a camera or recording its poses: from the trajectory file; without one, tracked by the
+// odometry (--poses auto or estimate) or none (--poses input: a static camera at the identity).
 bool AddPoses(const MapInputOptions& options, MapInput* input, std::string* why) {
   if (options.trajectory_path.empty()) {
-    if (!options.estimate_poses) {
+    if (options.estimate_missing_poses) {
+      input->estimate_poses = true;
+      input->note = "no --trajectory";
+    } else if (!options.estimate_poses) {
       input->note =
           "no --trajectory: the camera is taken as static at the identity pose (--poses "
           "estimate tracks it)";
@@ -44,7 +48,8 @@ bool AddPoses(const MapInputOptions& options, MapInput* input, std::string* why)
 
 // --poses estimate: the odometry replaces whatever poses the stream has.
 bool EstimatePoses(const MapInputOptions& options, MapInput* input, std::string* why) {
-  if (!options.estimate_poses) return true;
+  if (!options.estimate_poses && !input->estimate_poses) return true;
+  input->estimate_poses = true;
   if (!options.odometry.IsValid(why)) return false;
   input->estimated = std::make_shared<EstimatedTrajectory>();
   input->stream = WithEstimatedPoses(std::move(input->stream), options.odometry, input->estimated);

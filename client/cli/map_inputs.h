@@ -27,6 +27,9 @@ struct MapInputOptions {
   /// --poses estimate: every frame's pose from RgbdOdometry, whatever the input brings (a
   /// dataset's own poses are kept to score the estimate against).
   bool estimate_poses = false;
+  /// --poses auto (the default): the estimate for an input without poses of its own (a camera
+  /// or .oni recording without --trajectory), the input's poses otherwise.
+  bool estimate_missing_poses = true;
   OdometryConfig odometry;
   /// ROS bags; an empty field keeps the reader's default (topics: auto-detected).
   std::string bag_color_topic;        ///< --bag-color-topic
@@ -55,6 +58,8 @@ struct MapInput {
   bool selection_applied = false;
   /// Printed before the run: how poses are obtained, when the user should know.
   std::string note;
+  /// The poses come from the odometry: --poses estimate, or auto on an input without poses.
+  bool estimate_poses = false;
   /// With estimate_poses: the tracked trajectory, filled as frames are read.
   std::shared_ptr<EstimatedTrajectory> estimated;
   /// The source's own poses are real (a dataset's, a bag's, a --trajectory's), so the estimate

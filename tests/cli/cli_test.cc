@@ -150,7 +150,7 @@ TEST_F(CliScene, EstimatedPosesOnRealFramesAreScoredAgainstTheDatasets) {
 
   const CommandResult wrong = RunObjmap(MapArguments("--poses gps"));
   EXPECT_EQ(wrong.exit_code, 2) << wrong.output;
-  EXPECT_NE(wrong.output.find("--poses must be input or estimate, not gps"), std::string::npos)
+  EXPECT_NE(wrong.output.find("--poses must be auto, input or estimate, not gps"), std::string::npos)
       << wrong.output;
 }
 

@@ -2,11 +2,16 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
+#include "dataset/sequence_reader.h"
+#include "dataset/trajectory.h"
+#include "evaluation/trajectory_evaluation.h"
 #include "openni2/oni_file_writer.h"
 #include "run_objmap.h"
+#include "test_data.h"
 
 namespace objmap {
 namespace {
@@ -64,11 +69,11 @@ TEST_F(MapOpenNI2, MissingAndCorruptRecordingsAreNamed) {
       << result.output;
 }
 
-TEST_F(MapOpenNI2, MapsARecordingAtTheIdentityPose) {
+TEST_F(MapOpenNI2, MapsARecordingAtTheIdentityPoseWhenAsked) {
   WriteRecording("wall.oni", 4);
   const CommandResult result =
       RunObjmap("map " + Path("wall.oni") + " --out " + Path("out") + " --detections " +
-                Path("detections.json") + " --every-frame");
+                Path("detections.json") + " --every-frame --poses input");
   ASSERT_EQ(result.exit_code, 0) << result.output;
   EXPECT_NE(result.output.find("mapping OpenNI2 recording " + Path("wall.oni")), std::string::npos)
       << result.output;
@@ -77,6 +82,50 @@ TEST_F(MapOpenNI2, MapsARecordingAtTheIdentityPose) {
       << result.output;
   EXPECT_NE(result.output.find("keyframes: 4 of 4 frames read"), std::string::npos)
       << result.output;
+  EXPECT_TRUE(fs::exists(Path("out/map.bt")));
+}
+
+TEST_F(MapOpenNI2, ARecordingWithoutTrajectoryIsMappedWithEstimatedPoses) {
+  const std::string folder = testing::SharedDataPath("redkitchen");
+  OBJMAP_REQUIRE_PATH(folder);
+  std::string why;
+  const auto reader = OpenSequence(folder, &why);
+  ASSERT_NE(reader, nullptr) << why;
+  // 20 redkitchen frames (every second of the first 40) recorded as a camera would: 640 x 480,
+  // the field of view of its 585 px focal length, 1 mm depth units.
+  testing::OniTestRecording recording;
+  recording.width = 640;
+  recording.height = 480;
+  recording.horizontal_fov_rad = static_cast<float>(2.0 * std::atan(320.0 / 585.0));
+  recording.vertical_fov_rad = static_cast<float>(2.0 * std::atan(240.0 / 585.0));
+  std::vector<TrajectoryPose> reference;
+  for (int n = 0; n < 20; ++n) {
+    RgbdFrame frame;
+    ASSERT_TRUE(reader->ReadFrame(static_cast<std::size_t>(2 * n), &frame, &why)) << why;
+    testing::OniTestFrame oni;
+    oni.timestamp_us = 66667u * static_cast<std::uint64_t>(n + 1);
+    oni.rgb = frame.color.rgb;
+    oni.depth_mm.reserve(frame.depth.depth_m.size());
+    for (const float z : frame.depth.depth_m) {
+      oni.depth_mm.push_back(z > 0.f ? static_cast<std::uint16_t>(std::lround(z * 1000.f)) : 0);
+    }
+    recording.frames.push_back(std::move(oni));
+    reference.push_back({0.0, frame.T_W_C});
+  }
+  ASSERT_TRUE(testing::WriteOniFile(Path("kitchen.oni"), recording));
+  const CommandResult result = RunObjmap("map " + Path("kitchen.oni") + " --out " + Path("out") +
+                                         " --detections " + Path("detections.json"));
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  EXPECT_NE(result.output.find("no --trajectory; poses estimated by RGB-D odometry"),
+            std::string::npos)
+      << result.output;
+  std::vector<TrajectoryPose> estimated;
+  ASSERT_TRUE(ReadTumTrajectory(Path("out/trajectory.txt"), &estimated, &why)) << why;
+  ASSERT_EQ(estimated.size(), reference.size()) << result.output;
+  for (std::size_t i = 0; i < estimated.size(); ++i) reference[i].stamp_s = estimated[i].stamp_s;
+  TrajectoryErrors errors;
+  ASSERT_TRUE(EvaluateTrajectory(estimated, reference, {}, &errors, &why)) << why;
+  EXPECT_LT(errors.ate_rmse_m, 0.02);
   EXPECT_TRUE(fs::exists(Path("out/map.bt")));
 }
 
@@ -104,7 +153,7 @@ TEST_F(MapOpenNI2, MaxFramesLimitsARecording) {
   WriteRecording("wall.oni", 5);
   const CommandResult result =
       RunObjmap("map " + Path("wall.oni") + " --out " + Path("out") + " --detections " +
-                Path("detections.json") + " --every-frame --max-frames 2");
+                Path("detections.json") + " --every-frame --max-frames 2 --poses input");
   ASSERT_EQ(result.exit_code, 0) << result.output;
   EXPECT_NE(result.output.find("keyframes: 2 of 2 frames read"), std::string::npos)
       << result.output;
