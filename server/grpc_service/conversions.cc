@@ -69,6 +69,8 @@ grpc::Status ToGrpcStatus(const ServiceStatus& status) {
       return {grpc::StatusCode::UNAVAILABLE, status.message};
     case StatusCode::kInternal:
       return {grpc::StatusCode::INTERNAL, status.message};
+    case StatusCode::kFailedPrecondition:
+      return {grpc::StatusCode::FAILED_PRECONDITION, status.message};
   }
   return {grpc::StatusCode::INTERNAL, "unknown status code: " + status.message};
 }

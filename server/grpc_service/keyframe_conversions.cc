@@ -278,7 +278,8 @@ bool WithinLimits(const v1::AddKeyframeRequest& request, const RequestLimits& li
 }
 
 bool FrameFromRequest(const v1::AddKeyframeRequest& request, const RequestLimits& limits,
-                      RgbdFrame* frame, std::optional<std::vector<Detection>>* detections,
+                      bool pose_optional, RgbdFrame* frame,
+                      std::optional<std::vector<Detection>>* detections,
                       grpc::StatusCode* code, std::string* why) {
   // The limits first: they cost nothing to check and bound what the rest may cost.
   if (!WithinLimits(request, limits, why)) {
@@ -287,7 +288,8 @@ bool FrameFromRequest(const v1::AddKeyframeRequest& request, const RequestLimits
   }
   *code = grpc::StatusCode::INVALID_ARGUMENT;
   if (!IntrinsicsFromProto(request.intrinsics(), &frame->intrinsics, why) ||
-      !PoseFromProto(request.t_w_c(), "T_W_C", &frame->T_W_C, why)) {
+      (!(pose_optional && !request.has_t_w_c()) &&
+       !PoseFromProto(request.t_w_c(), "T_W_C", &frame->T_W_C, why))) {
     return false;
   }
   if (!std::isfinite(request.stamp())) {

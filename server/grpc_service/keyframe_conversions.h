@@ -42,9 +42,11 @@ inline constexpr double kDefaultDepthScale = 0.001;
 /// request says detections_given, otherwise nullopt (the server's detector runs). False with a
 /// reason naming the field ("T_W_C.qw ...", "detections[3].class_name ...") and `code`:
 /// RESOURCE_EXHAUSTED beyond `limits` (checked before anything is decoded), INVALID_ARGUMENT
-/// otherwise.
+/// otherwise. With `pose_optional` (a server that estimates poses) an unset T_W_C is the
+/// identity; a set one is still checked.
 [[nodiscard]] bool FrameFromRequest(const v1::AddKeyframeRequest& request,
-                                    const RequestLimits& limits, RgbdFrame* frame,
+                                    const RequestLimits& limits, bool pose_optional,
+                                    RgbdFrame* frame,
                                     std::optional<std::vector<Detection>>* detections,
                                     grpc::StatusCode* code, std::string* why);
 

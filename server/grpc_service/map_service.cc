@@ -57,6 +57,8 @@ void OutcomeToProto(const AddKeyframeOutcome& outcome, v1::AddKeyframeResponse* 
   response->set_keyframe_id(outcome.keyframe_id);
   response->set_map_version(outcome.map_version);
   response->set_detections_used(outcome.detections_used);
+  *response->mutable_t_w_c() = PoseToProto(outcome.T_W_C);
+  response->set_loops_closed(outcome.loops_closed);
   response->mutable_created_objects()->Add(outcome.created.begin(), outcome.created.end());
   response->mutable_updated_objects()->Add(outcome.updated.begin(), outcome.updated.end());
   response->mutable_removed_objects()->Add(outcome.removed.begin(), outcome.removed.end());
@@ -197,7 +199,8 @@ grpc::Status MapServiceImpl::AddOne(const v1::AddKeyframeRequest& request,
   std::optional<std::vector<Detection>> detections;
   std::string why;
   grpc::StatusCode code = grpc::StatusCode::INVALID_ARGUMENT;
-  if (!FrameFromRequest(request, server_.limits(), &frame, &detections, &code, &why)) {
+  if (!FrameFromRequest(request, server_.limits(), server_.estimates_poses(), &frame, &detections,
+                        &code, &why)) {
     return {code, why};
   }
   return ToGrpcStatus(server_.AddKeyframe(std::move(frame), std::move(detections), outcome));

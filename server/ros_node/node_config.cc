@@ -21,6 +21,16 @@ class ParamReader : public ros_bridge::RosParamReader {
 
   using RosParamReader::operator();
 
+  /// request or estimate, as in the YAML file.
+  void operator()(const char* key, PoseSource* source) {
+    XmlRpc::XmlRpcValue raw;
+    if (!Fetch(key, &raw)) return;
+    if (raw.getType() != XmlRpc::XmlRpcValue::TypeString ||
+        !ParsePoseSource(static_cast<std::string>(raw), source)) {
+      Fail(key, "expected request or estimate, got " + ros_bridge::DescribeParam(raw));
+    }
+  }
+
   /// COCO classes, by name ("dining table") or id, as in the YAML file.
   void operator()(const char* key, std::vector<int>* class_ids) {
     XmlRpc::XmlRpcValue raw;

@@ -16,7 +16,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   std::optional<std::vector<objmap::Detection>> detections;
   grpc::StatusCode code = grpc::StatusCode::OK;
   std::string why;
-  if (objmap::grpc_service::FrameFromRequest(request, limits, &frame, &detections, &code, &why)) {
+  // Both kinds of server: pose required, and pose estimated (an unset pose allowed).
+  const bool pose_optional = size % 2 == 1;
+  if (objmap::grpc_service::FrameFromRequest(request, limits, pose_optional, &frame, &detections,
+                                             &code, &why)) {
     // What the server does next with an accepted frame.
     if (!objmap::ValidateFrame(frame, &why)) __builtin_trap();
   }

@@ -221,16 +221,32 @@ class FrameFromRequestTest : public ::testing::Test {
   }
 
   bool Convert() {
-    return FrameFromRequest(request_, limits_, &frame_, &detections_, &code_, &why_);
+    return FrameFromRequest(request_, limits_, pose_optional_, &frame_, &detections_, &code_,
+                            &why_);
   }
 
   v1::AddKeyframeRequest request_;
   RequestLimits limits_;
+  bool pose_optional_ = false;
   RgbdFrame frame_;
   std::optional<std::vector<Detection>> detections_;
   grpc::StatusCode code_ = grpc::StatusCode::OK;
   std::string why_;
 };
+
+TEST_F(FrameFromRequestTest, AnUnsetPoseIsRefusedUnlessTheServerEstimatesPoses) {
+  request_.clear_t_w_c();
+  EXPECT_FALSE(Convert());
+  EXPECT_EQ(code_, grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(why_.find("(pose unset?)"), std::string::npos) << why_;
+  pose_optional_ = true;
+  ASSERT_TRUE(Convert()) << why_;
+  EXPECT_TRUE(frame_.T_W_C.isApprox(Eigen::Isometry3d::Identity()));
+  // A pose that is there is still checked.
+  request_.mutable_t_w_c()->set_qw(std::nan(""));
+  EXPECT_FALSE(Convert());
+  EXPECT_NE(why_.find("T_W_C.qw"), std::string::npos) << why_;
+}
 
 TEST_F(FrameFromRequestTest, DetectionsOnlyWhenGiven) {
   ASSERT_TRUE(Convert()) << why_;

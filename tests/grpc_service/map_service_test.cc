@@ -17,6 +17,7 @@
 #include <fstream>
 #include <sstream>
 #include <future>
+#include <random>
 #include <thread>
 #include <vector>
 
@@ -114,6 +115,62 @@ class MapServiceTest : public ::testing::Test {
   std::unique_ptr<grpc::Server> server_;
   std::unique_ptr<v1::MapService::Stub> stub_;
 };
+
+TEST_F(MapServiceTest, AServerThatEstimatesPosesTakesKeyframesWithoutOneAndSaysWhenItIsLost) {
+  Stop();
+  server_config_.pose_source = PoseSource::kEstimate;
+  Start(64);
+  // Nothing to track in a blank frame: FAILED_PRECONDITION naming why, and nothing mapped.
+  v1::AddKeyframeRequest blank = Keyframe(0);
+  blank.clear_t_w_c();
+  RgbdFrame flat;
+  flat.intrinsics = K_;
+  flat.color = {K_.width, K_.height, std::vector<std::uint8_t>(3u * K_.width * K_.height, 128)};
+  flat.depth = {K_.width, K_.height, std::vector<float>(static_cast<std::size_t>(K_.width) * K_.height, 1.5f)};
+  std::string why;
+  ASSERT_TRUE(MakeAddKeyframeRequest(flat, nullptr, KeyframeEncoding{}, &blank, &why)) << why;
+  blank.clear_t_w_c();
+  v1::AddKeyframeResponse response;
+  grpc::Status status = Add(blank, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_NE(status.error_message().find("tracking lost"), std::string::npos)
+      << status.error_message();
+  EXPECT_EQ(map_server_->Status().keyframes, 0u);
+  // A textured view (the scene's colours under a pattern of 6 px squares, for keypoints)
+  // without a pose starts the map at its camera.
+  const std::vector<SceneBox> boxes = {{{-0.6, -0.8, 0.60}, {0.6, 0.8, 0.70}, {150, 100, 60}},
+                                       {{1.5, -2.0, 0.0}, {1.6, 2.0, 2.5}, {220, 220, 220}}};
+  RgbdFrame textured = testing::RenderFrame(
+      boxes, K_, testing::LookAt({-1.0, 0.0, 1.3}, Eigen::Vector3d(0, 0, 0.7)), "textured");
+  std::mt19937 random(7);
+  std::uniform_int_distribution<int> shade(40, 255);
+  for (int by = 0; by < K_.height; by += 6) {
+    for (int bx = 0; bx < K_.width; bx += 6) {
+      const int level = shade(random);
+      for (int y = by; y < std::min(by + 6, K_.height); ++y) {
+        for (int x = bx; x < std::min(bx + 6, K_.width); ++x) {
+          for (int c = 0; c < 3; ++c) {
+            std::uint8_t& value = textured.color.rgb[3u * (static_cast<std::size_t>(y) * K_.width + x) + c];
+            value = static_cast<std::uint8_t>(value * level / 255);
+          }
+        }
+      }
+    }
+  }
+  v1::AddKeyframeRequest first;
+  ASSERT_TRUE(MakeAddKeyframeRequest(textured, nullptr, KeyframeEncoding{}, &first, &why)) << why;
+  first.clear_t_w_c();
+  status = Add(first, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  Eigen::Isometry3d mapped_at;
+  ASSERT_TRUE(PoseFromProto(response.t_w_c(), &mapped_at, &why)) << why;
+  EXPECT_TRUE(mapped_at.isApprox(Eigen::Isometry3d::Identity()));
+  // A pose that is there is still checked, even though it would be ignored.
+  v1::AddKeyframeRequest nan_pose = Keyframe(1);
+  nan_pose.mutable_t_w_c()->set_qw(std::nan(""));
+  status = Add(nan_pose, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+}
 
 TEST_F(MapServiceTest, AddedKeyframeMakesAQueryableObject) {
   v1::AddKeyframeResponse added;

@@ -76,6 +76,14 @@ class Reader {
     }
   }
 
+  void operator()(const char* key, PoseSource* source) {
+    const YAML::Node node = Field(key);
+    if (!node) return;
+    if (!node.IsScalar() || !ParsePoseSource(node.Scalar(), source)) {
+      error_ = section_name_ + "." + key + ": expected request or estimate, got " + Describe(node);
+    }
+  }
+
   /// COCO classes, by name ("dining table") or id.
   void operator()(const char* key, std::vector<int>* class_ids) {
     const YAML::Node node = Field(key);
@@ -168,6 +176,10 @@ class Writer {
   template <typename T>
   void operator()(const char* key, T* value) {
     out_ << YAML::Key << key << YAML::Value << *value;
+  }
+
+  void operator()(const char* key, PoseSource* source) {
+    out_ << YAML::Key << key << YAML::Value << std::string(PoseSourceName(*source));
   }
 
   void operator()(const char* key, std::vector<int>* class_ids) {

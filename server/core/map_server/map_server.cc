@@ -58,6 +58,21 @@ StoreChange AllObjectsChange(const Mapper& mapper) {
 
 }  // namespace
 
+const char* PoseSourceName(PoseSource source) {
+  return source == PoseSource::kEstimate ? "estimate" : "request";
+}
+
+bool ParsePoseSource(const std::string& name, PoseSource* source) {
+  if (name == "request") {
+    *source = PoseSource::kRequest;
+  } else if (name == "estimate") {
+    *source = PoseSource::kEstimate;
+  } else {
+    return false;
+  }
+  return true;
+}
+
 bool MapServerConfig::IsValid(std::string* why) const {
   if (!mapper.IsValid(why) || !store.IsValid(why) || !limits.IsValid(why) ||
       !fairness.IsValid(why)) {
@@ -79,6 +94,7 @@ bool MapServerConfig::IsValid(std::string* why) const {
     *why = "MapServerConfig.max_query_volume_m3 must be positive";
     return false;
   }
+  if (pose_source == PoseSource::kEstimate && !odometry.IsValid(why)) return false;
   return true;
 }
 
@@ -125,6 +141,10 @@ std::unique_ptr<MapServer> MapServer::Open(const MapServerConfig& config,
   heavy.max_waiting = config.fairness.max_waiting_heavy_queries;
   heavy.name = "objmap-heavy";
   impl.heavy_query_threads = std::make_unique<TaskThreads>(heavy);
+  if (config.pose_source == PoseSource::kEstimate) {
+    impl.odometry = std::make_unique<RgbdOdometry>(config.odometry);
+    impl.ResumeTracking();
+  }
   // What this start had to integrate, the next one loads.
   impl.MaybeCheckpoint(/*force=*/true);
   impl.startup_ms = MillisecondsSince(start);
@@ -366,12 +386,60 @@ MapJob::Result MapServer::Impl::ApplyPoses(MapJob* job) {
   return out;
 }
 
+void MapServer::Impl::ResumeTracking() {
+  KeyframeId newest = 0;
+  {
+    std::lock_guard<std::mutex> lock(known_mutex);
+    if (known_keyframes.empty()) return;  // a new map: the first keyframe starts it
+    newest = *known_keyframes.rbegin();
+  }
+  StoredKeyframe stored;
+  std::string why;
+  if (!store->LoadKeyframe(newest, &stored, &why)) {
+    tracking_blocked = "tracking cannot resume on the stored map: " + why;
+    return;
+  }
+  RgbdFrame frame;
+  frame.name = "stored keyframe " + std::to_string(newest);
+  frame.intrinsics = stored.intrinsics;
+  frame.T_W_C = stored.T_W_C;
+  frame.color = std::move(stored.color);
+  frame.depth.width = stored.intrinsics.width;
+  frame.depth.height = stored.intrinsics.height;
+  frame.depth.depth_m.reserve(stored.depth_mm.size());
+  for (const std::uint16_t mm : stored.depth_mm) frame.depth.depth_m.push_back(mm * 0.001f);
+  if (!odometry->StartFromKnownPose(frame, &why)) {
+    tracking_blocked = "tracking cannot resume on the stored map (from keyframe " +
+                       std::to_string(newest) + "): " + why;
+  }
+}
+
+bool MapServer::estimates_poses() const { return impl_->odometry != nullptr; }
+
 ServiceStatus MapServer::AddKeyframe(RgbdFrame frame,
                                      std::optional<std::vector<Detection>> detections,
                                      AddKeyframeOutcome* outcome) {
   std::string why;
+  std::unique_lock<std::mutex> tracking;
+  if (impl_->odometry) {
+    tracking = std::unique_lock<std::mutex>(impl_->tracking_mutex);
+    frame.T_W_C = Eigen::Isometry3d::Identity();  // ours to estimate; only the images are checked
+  }
   if (!ValidateFrame(frame, &why)) return ServiceStatus::Invalid(why);
   if (impl_->shutting_down) return {StatusCode::kUnavailable, "the server is shutting down"};
+  TrackingReport tracked;
+  if (impl_->odometry) {
+    if (!impl_->tracking_blocked.empty()) {
+      return {StatusCode::kFailedPrecondition, impl_->tracking_blocked};
+    }
+    tracked = impl_->odometry->Track(frame);
+    if (tracked.status == TrackingStatus::kLost) {
+      return {StatusCode::kFailedPrecondition,
+              frame.name + ": tracking lost (" + tracked.why +
+                  "); the keyframe is not mapped: send one that overlaps the last ones"};
+    }
+    frame.T_W_C = tracked.T_W_C;
+  }
   auto job = std::make_shared<MapJob>();
   if (detections) {
     job->detections = std::move(*detections);
@@ -382,12 +450,34 @@ ServiceStatus MapServer::AddKeyframe(RgbdFrame frame,
         [&] { detected = impl_->detector->Detect(frame, &job->detections, &why); });
     if (!detected) return ServiceStatus::Invalid("detector: " + why);
   }
+  const Eigen::Isometry3d mapped_pose = frame.T_W_C;
   job->frame = std::move(frame);
   const std::shared_future<MapJob::Result> done = job->result;
   ServiceStatus queued = impl_->Enqueue(job, /*bounded=*/true);
   if (!queued.ok()) return queued;
   MapJob::Result result = done.get();
-  if (result.status.ok()) *outcome = std::move(result.keyframe);
+  if (!result.status.ok()) return result.status;
+  *outcome = std::move(result.keyframe);
+  outcome->T_W_C = mapped_pose;
+  if (!impl_->odometry) return result.status;
+  RgbdOdometry& odometry = *impl_->odometry;
+  impl_->tracked_keyframes[outcome->keyframe_id] = {
+      tracked.reference_keyframe,
+      odometry.KeyframePose(tracked.reference_keyframe).inverse() * tracked.T_W_C};
+  outcome->loops_closed = tracked.loops_closed;
+  if (tracked.loops_closed == 0) return result.status;
+  // A loop closed: every tracked keyframe follows the odometry keyframe it was tracked against.
+  std::map<KeyframeId, Eigen::Isometry3d> moved;
+  for (const auto& [id, on_keyframe] : impl_->tracked_keyframes) {
+    moved[id] = odometry.KeyframePose(on_keyframe.first) * on_keyframe.second;
+  }
+  PoseUpdateOutcome update;
+  const ServiceStatus updated = UpdatePoses(moved, /*wait=*/false, &update);
+  if (!updated.ok()) {
+    return {updated.code, "keyframe " + std::to_string(outcome->keyframe_id) +
+                              " is mapped, but the poses of the loop it closed are not: " +
+                              updated.message};
+  }
   return result.status;
 }
 

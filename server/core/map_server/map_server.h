@@ -14,6 +14,7 @@
 #include "map_server/request_limits.h"
 #include "mapper/mapper.h"
 #include "objects/voxel_model.h"
+#include "odometry/rgbd_odometry.h"
 #include "occupancy/occupancy_map.h"
 #include "store/keyframe_store.h"
 #include "types/detection.h"
@@ -29,6 +30,7 @@ enum class StatusCode {
   kResourceExhausted,   ///< the ingest queue is full; retry later
   kUnavailable,         ///< the server is shutting down
   kInternal,            ///< storage failed; the message says how
+  kFailedPrecondition,  ///< well-formed, but the server's state refuses it (tracking lost)
 };
 
 struct ServiceStatus {
@@ -45,8 +47,24 @@ struct ServiceStatus {
   }
 };
 
+/// Where the poses of added keyframes come from.
+enum class PoseSource {
+  kRequest,   ///< each AddKeyframe's own pose (a SLAM system, TF, a dataset)
+  kEstimate,  ///< RGB-D odometry on the keyframes themselves; the request's pose is ignored
+};
+
+/// "request" / "estimate" (config files, messages).
+[[nodiscard]] const char* PoseSourceName(PoseSource source);
+/// False for any other name.
+[[nodiscard]] bool ParsePoseSource(const std::string& name, PoseSource* source);
+
 struct MapServerConfig {
   MapperConfig mapper;
+  /// Config key server.pose_source: request (default) or estimate. With kEstimate the server
+  /// tracks the camera from the keyframes (sent in time order, each overlapping the last ones),
+  /// closes loops, and moves the mapped keyframes when a loop closes (as UpdatePoses would).
+  PoseSource pose_source = PoseSource::kRequest;
+  OdometryConfig odometry;  ///< with kEstimate
   KeyframeStoreConfig store;
   /// Keyframes and pose updates waiting for the mapping thread; AddKeyframe beyond this answers
   /// kResourceExhausted instead of queueing without bound.
@@ -119,6 +137,11 @@ struct AddKeyframeOutcome {
   std::vector<ObjectId> created;
   std::vector<ObjectId> updated;
   std::vector<ObjectId> removed;  ///< absorbed by merges
+  /// The pose the keyframe was mapped at: the request's, or with PoseSource::kEstimate the
+  /// tracked one.
+  Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
+  /// PoseSource::kEstimate: loops this keyframe closed (every tracked keyframe then moved).
+  int loops_closed = 0;
 };
 
 struct PoseUpdateOutcome {
@@ -189,12 +212,17 @@ class MapServer {
 
   /// Validates the frame, maps it and commits it; returns when it is durable. `detections`
   /// absent: the configured detector runs (no detector: no objects from this keyframe).
+  /// With PoseSource::kEstimate the frame's pose is ignored and tracked instead; calls are then
+  /// taken one at a time (one camera, in order), and a frame that cannot be tracked is refused
+  /// with kFailedPrecondition and the reason, and not mapped.
   [[nodiscard]] ServiceStatus AddKeyframe(RgbdFrame frame,
                                           std::optional<std::vector<Detection>> detections,
                                           AddKeyframeOutcome* outcome);
 
   /// Validates (known ids, finite rigid poses), stores the poses durably and queues the
   /// regeneration; with `wait`, returns after it has been applied.
+  /// True with PoseSource::kEstimate: AddKeyframe needs no pose.
+  [[nodiscard]] bool estimates_poses() const;
   [[nodiscard]] ServiceStatus UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses,
                                           bool wait, PoseUpdateOutcome* outcome);
 
