@@ -2,7 +2,7 @@
 # OBJMAP_ROS_ENABLED and, when ROS is there, generates the messages and services, declares the
 # catkin packages objmap and objmap_msgs (so that other catkin packages find the messages) and adds the ROS folders.
 set(OBJMAP_ROS_COMPONENTS roscpp message_generation message_runtime message_filters std_msgs
-  geometry_msgs sensor_msgs visualization_msgs tf2 tf2_ros tf2_msgs rosbag rosbag_storage)
+  geometry_msgs sensor_msgs visualization_msgs nav_msgs tf2 tf2_ros tf2_msgs rosbag rosbag_storage)
 
 # catkin, genmsg and the ROS CMake configs run Python modules that Debian installs for its own
 # python3; a pyenv (or virtualenv) python3 first on PATH lacks them. Both variables default to
@@ -44,7 +44,7 @@ endif()
 set(OBJMAP_ROS_ENABLED ON)
 
 add_subdirectory(proto_srv/ros_msgs)
-catkin_package(CATKIN_DEPENDS roscpp std_msgs geometry_msgs sensor_msgs visualization_msgs
+catkin_package(CATKIN_DEPENDS roscpp std_msgs geometry_msgs sensor_msgs visualization_msgs nav_msgs
   message_filters tf2_ros rosbag)
 
 # What every ROS target of objmap compiles and links against: the ROS headers and libraries and

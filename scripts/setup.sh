@@ -24,16 +24,17 @@ readonly PACKAGES=(
   catkin ros-message-generation ros-message-runtime python3-genmsg python3-gencpp
   libroscpp-dev librosbag-dev libmessage-filters-dev libtf2-dev libtf2-ros-dev libtf2-msgs-dev
   libstd-msgs-dev libgeometry-msgs-dev libsensor-msgs-dev libvisualization-msgs-dev
+  libnav-msgs-dev
   # The .msg definitions that objmap_msgs' generation reads (the lib*-msgs-dev packages above hold
   # only the generated C++ headers).
-  ros-std-msgs ros-geometry-msgs ros-sensor-msgs
+  ros-std-msgs ros-geometry-msgs ros-sensor-msgs ros-nav-msgs
   python3-rosmaster python3-roslaunch
   # objmap_msgs for Python (genpy) and the ROS tools a user types: rosservice, rostopic, rosnode,
   # rosmsg/rossrv, rosrun, rospy clients; the Python message packages of the node's topics and
   # services (MarkerArray, PointCloud2, TF), which rostopic and rospy import.
   python3-genpy python3-rospy python3-rosservice python3-rostopic python3-rosnode python3-rosmsg
   rosbash python3-std-msgs python3-geometry-msgs python3-sensor-msgs python3-visualization-msgs
-  python3-tf2-msgs
+  python3-tf2-msgs python3-nav-msgs
 )
 # Packages needed only for a command they provide: a machine may have that command from elsewhere
 # (Node.js from NodeSource, say), and the Debian package would then conflict with it.

@@ -1,5 +1,6 @@
 #include "map_node.h"
 
+#include <nav_msgs/Path.h>
 #include <tf2/exceptions.h>
 
 #include <iomanip>
@@ -42,9 +43,14 @@ MapNode::MapNode(const ros::NodeHandle& node, const ros::NodeHandle& private_nod
     : impl_(std::make_unique<Impl>(node, private_node, config, std::move(server))) {
   impl_->AdvertiseTopics();
   impl_->AdvertiseServices();
+  if (impl_->config.estimates_poses()) {
+    impl_->odometry = std::make_unique<RgbdOdometry>(impl_->config.objmap.map_server.odometry);
+    impl_->tf_broadcaster = std::make_unique<tf2_ros::TransformBroadcaster>();
+    impl_->ResumeTracking();
+  }
   impl_->camera = std::move(camera);
   if (impl_->camera) {
-    if (!impl_->config.openni2.static_camera) {
+    if (!impl_->config.openni2.static_camera && !impl_->config.estimates_poses()) {
       impl_->tf_listener = std::make_unique<tf2_ros::TransformListener>(impl_->tf_buffer, node);
     }
     impl_->camera_thread = std::thread([impl = impl_.get()] { impl->ReadCameraLoop(); });
@@ -90,7 +96,9 @@ void MapNode::Impl::SubscribeInputs() {
               : Synchronize<ApproximateTime<Image, Image, CameraInfo, DetectionArray>>(
                     &MapNode::Impl::OnFrame, color_sub, depth_sub, info_sub, detections_sub);
   }
-  if (!config.pose_topic.empty()) {
+  if (config.estimates_poses()) {
+    // Poses are tracked from the frames: neither TF nor a pose topic is read.
+  } else if (!config.pose_topic.empty()) {
     // Poses arrive on the global queue: a frame waiting for its pose on frame_queue must not
     // hold back the pose it waits for.
     pose_sub = node.subscribe(config.pose_topic, 100, &MapNode::Impl::OnPose, this);
@@ -203,14 +211,20 @@ void MapNode::Impl::OnFrame(const sensor_msgs::ImageConstPtr& color,
   if (stopping) return;
   const ros::Time stamp = color->header.stamp;
   std::string why;
-  Eigen::Isometry3d T_W_C;
-  if (!CameraPose(*color, &T_W_C, &why)) return Reject(stamp, why);
+  Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
+  if (!config.estimates_poses() && !CameraPose(*color, &T_W_C, &why)) return Reject(stamp, why);
   RgbdFrame frame;
   if (!ros_bridge::FrameFromMsgs(*color, *depth, *info, T_W_C, config.depth_scale, &frame, &why)) {
     return Reject(stamp, why);
   }
   frame.frame_index = frames_received.load();
   frame.name = "frame at t=" + StampText(stamp);
+  if (config.estimates_poses()) {
+    const std::string camera_frame = !config.camera_frame.empty() ? config.camera_frame
+                                     : !color->header.frame_id.empty() ? color->header.frame_id
+                                                                        : "camera";
+    if (!TrackFrame(&frame, stamp, camera_frame, &why)) return Reject(stamp, why);
+  }
   std::optional<std::vector<Detection>> given;
   if (detections) {
     given.emplace();
@@ -249,8 +263,15 @@ void MapNode::Impl::ReadCameraLoop() {
       last_rejection = source + " failed: " + why;
       return;
     }
+    // A static camera needs no pose; otherwise it is tracked or looked up in TF.
     if (status == FrameStatus::kFrame && !config.openni2.static_camera &&
-        !PoseFromTf(config.camera_frame, stamp, &frame.T_W_C, &why)) {
+        config.estimates_poses() &&
+        !TrackFrame(&frame, stamp, config.camera_frame.empty() ? "camera" : config.camera_frame,
+                    &why)) {
+      Reject(stamp, why);
+    } else if (status == FrameStatus::kFrame && !config.openni2.static_camera &&
+               !config.estimates_poses() &&
+               !PoseFromTf(config.camera_frame, stamp, &frame.T_W_C, &why)) {
       Reject(stamp, why);
     } else if (status == FrameStatus::kBadFrame) {
       Reject(stamp, why);
@@ -264,6 +285,70 @@ void MapNode::Impl::ReadCameraLoop() {
   }
 }
 
+void MapNode::Impl::ResumeTracking() {
+  RgbdFrame newest;
+  const ServiceStatus loaded = server->NewestKeyframe(&newest);
+  if (loaded.code == StatusCode::kNotFound) return;  // a new map: the first frame starts it
+  std::string why;
+  if (!loaded.ok()) {
+    tracking_blocked = "tracking cannot resume on the stored map: " + loaded.message;
+  } else if (!odometry->StartFromKnownPose(newest, &why)) {
+    tracking_blocked = "tracking cannot resume on the stored map (from " + newest.name + "): " + why;
+  } else {
+    ROS_INFO_STREAM("objmap_node: tracking resumes from " << newest.name);
+  }
+  if (!tracking_blocked.empty()) ROS_ERROR_STREAM("objmap_node: " << tracking_blocked);
+}
+
+bool MapNode::Impl::TrackFrame(RgbdFrame* frame, const ros::Time& stamp,
+                               const std::string& camera_frame, std::string* why) {
+  last_tracking.reset();
+  if (!tracking_blocked.empty()) {
+    *why = tracking_blocked;
+    return false;
+  }
+  const TrackingReport report = odometry->Track(*frame);
+  if (report.status == TrackingStatus::kLost) {
+    *why = "tracking lost: " + report.why;
+    return false;
+  }
+  frame->T_W_C = report.T_W_C;
+  geometry_msgs::TransformStamped transform;
+  transform.header.stamp = stamp;
+  transform.header.frame_id = config.world_frame;
+  transform.child_frame_id = camera_frame;
+  transform.transform = ros_bridge::TransformToMsg(report.T_W_C);
+  tf_broadcaster->sendTransform(transform);
+  if (report.loops_closed > 0 && !tracked_keyframes.empty()) {
+    // The loop moved the odometry's keyframes: the mapped keyframes follow, regenerated in the
+    // background while queries go on.
+    PoseUpdateOutcome update;
+    const ServiceStatus moved =
+        server->UpdatePoses(tracked_keyframes.Poses(*odometry), /*wait=*/false, &update);
+    if (!moved.ok()) {
+      ROS_ERROR_STREAM("objmap_node: a loop closed but the map's poses were not updated: "
+                       << moved.message);
+    }
+    PublishTrajectory();
+  }
+  last_tracking = report;
+  return true;
+}
+
+void MapNode::Impl::PublishTrajectory() {
+  nav_msgs::Path path;
+  path.header.stamp = ros::Time::now();
+  path.header.frame_id = config.world_frame;
+  for (const auto& [id, T_W_C] : tracked_keyframes.Poses(*odometry)) {
+    geometry_msgs::PoseStamped pose;
+    pose.header.frame_id = config.world_frame;
+    pose.header.stamp = keyframe_stamps[id];
+    pose.pose = ros_bridge::PoseToMsg(T_W_C);
+    path.poses.push_back(pose);
+  }
+  trajectory_pub.publish(path);
+}
+
 void MapNode::Impl::MapFrame(RgbdFrame frame, const ros::Time& stamp,
                              std::optional<std::vector<Detection>> detections) {
   if (!keyframe_selector.IsKeyframe(frame.T_W_C)) return;
@@ -272,6 +357,11 @@ void MapNode::Impl::MapFrame(RgbdFrame frame, const ros::Time& stamp,
       server->AddKeyframe(std::move(frame), std::move(detections), &outcome);
   if (!status.ok()) return Reject(stamp, "the map server refused it: " + status.message);
   ++keyframes_sent;
+  if (config.estimates_poses() && last_tracking) {
+    tracked_keyframes.Add(outcome.keyframe_id, *last_tracking, *odometry);
+    keyframe_stamps[outcome.keyframe_id] = stamp;
+    PublishTrajectory();
+  }
   ROS_DEBUG_STREAM("objmap_node: keyframe " << outcome.keyframe_id << " from t=" << StampText(stamp)
                                             << ", map version " << outcome.map_version);
 }

@@ -22,6 +22,7 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
 
 #include <atomic>
@@ -34,6 +35,7 @@
 #include "dataset/keyframe_selector.h"
 #include "map_node.h"
 #include "map_server/map_server.h"
+#include "odometry/tracked_keyframes.h"
 
 namespace objmap::ros_node {
 
@@ -62,6 +64,15 @@ struct MapNode::Impl {
   /// server's detector runs).
   void MapFrame(RgbdFrame frame, const ros::Time& stamp,
                 std::optional<std::vector<Detection>> detections);
+  /// ~pose_source estimate: tracks `frame` (giving it its pose), publishes the pose on TF as
+  /// world_frame -> `camera_frame`, and moves the mapped keyframes when it closes a loop. False
+  /// with the reason when the frame cannot be tracked.
+  bool TrackFrame(RgbdFrame* frame, const ros::Time& stamp, const std::string& camera_frame,
+                  std::string* why);
+  /// Starts tracking at the newest stored keyframe (a restart on an existing map).
+  void ResumeTracking();
+  /// The mapped keyframes' current poses as nav_msgs/Path on ~trajectory.
+  void PublishTrajectory();
   void OnPose(const geometry_msgs::PoseStampedConstPtr& pose);
   /// Reads `camera` until it ends, fails or the node stops (input "openni2").
   void ReadCameraLoop();
@@ -118,6 +129,15 @@ struct MapNode::Impl {
   std::unique_ptr<FrameStream> camera;
   std::thread camera_thread;
   KeyframeSelector keyframe_selector;
+
+  // ~pose_source estimate: the node's own camera tracking (frames come from one thread).
+  std::unique_ptr<RgbdOdometry> odometry;
+  TrackedKeyframes tracked_keyframes;
+  std::map<KeyframeId, ros::Time> keyframe_stamps;
+  std::optional<TrackingReport> last_tracking;  // of the frame MapFrame is about to map
+  std::string tracking_blocked;                 // why tracking cannot resume (empty: it can)
+  std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster;
+  ros::Publisher trajectory_pub;
 
   std::mutex pose_mutex;
   std::condition_variable pose_arrived;

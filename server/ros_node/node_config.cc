@@ -65,6 +65,7 @@ void VisitNodeKeys(NodeConfig* c, ParamReader& v) {
   v("world_frame", &c->world_frame);
   v("camera_frame", &c->camera_frame);
   v("pose_topic", &c->pose_topic);
+  v("pose_source", &c->pose_source);
   v("detections_topic", &c->detections_topic);
   v("run_detector", &c->run_detector);
   v("depth_scale", &c->depth_scale);
@@ -126,10 +127,20 @@ bool NodeConfig::IsValid(std::string* why) const {
     *why = "~input '" + input + "' must be topics or openni2";
     return false;
   }
-  if (input == "openni2" && !openni2.static_camera && camera_frame.empty()) {
+  if (pose_source != "external" && pose_source != "estimate") {
+    *why = "~pose_source '" + pose_source + "' must be external or estimate";
+    return false;
+  }
+  if (estimates_poses() && objmap.map_server.pose_source == PoseSource::kEstimate) {
     *why =
-        "~input openni2 needs ~camera_frame (the TF frame of the camera) or "
-        "~openni2/static_camera true";
+        "~pose_source estimate tracks every frame in the node; ~server/pose_source must stay "
+        "request";
+    return false;
+  }
+  if (input == "openni2" && !openni2.static_camera && !estimates_poses() && camera_frame.empty()) {
+    *why =
+        "~input openni2 needs ~camera_frame (the TF frame of the camera), "
+        "~openni2/static_camera true or ~pose_source estimate";
     return false;
   }
   // Named as the node's parameters; the other sections' reasons name their config struct.

@@ -54,6 +54,12 @@ struct NodeConfig {
   std::string camera_frame;
   /// geometry_msgs/PoseStamped topic with T_W_C instead of TF; empty: TF.
   std::string pose_topic;
+  /// Where camera poses come from: "external" (TF, or ~pose_topic) or "estimate": the node
+  /// tracks every frame itself (RGB-D odometry with loop closure, settings of section
+  /// `odometry`... defaults), publishes world_frame -> camera frame on TF and the keyframes'
+  /// poses as nav_msgs/Path on ~trajectory, and moves the mapped keyframes when a loop closes.
+  std::string pose_source = "external";
+  [[nodiscard]] bool estimates_poses() const { return pose_source == "estimate"; }
   /// objmap_msgs/DetectionArray topic from the robot's own detector, paired with the images by
   /// stamp; empty: the node runs its detector (or none, see run_detector).
   std::string detections_topic;

@@ -1,5 +1,6 @@
 // objmap_node's published topics: map changes, object markers and occupied cells, all from one
 // thread that follows MapServer::ChangesSince.
+#include <nav_msgs/Path.h>
 #include <objmap_msgs/MapChange.h>
 #include <visualization_msgs/MarkerArray.h>
 
@@ -51,6 +52,9 @@ void MapNode::Impl::AdvertiseTopics() {
   occupied_pub = private_node.advertise<sensor_msgs::PointCloud2>("occupied_cells", 1, true);
   object_cloud_pub = private_node.advertise<sensor_msgs::PointCloud2>("object_cloud", 10);
   changes_pub = private_node.advertise<objmap_msgs::MapChange>("map_changes", 100);
+  if (config.estimates_poses()) {
+    trajectory_pub = private_node.advertise<nav_msgs::Path>("trajectory", 1, true);
+  }
 }
 
 void MapNode::Impl::PublishMarkers(const MapSnapshot& snapshot) {

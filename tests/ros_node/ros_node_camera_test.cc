@@ -5,13 +5,21 @@
 #include <gtest/gtest.h>
 #include <objmap_msgs/QueryOccupancy.h>
 #include <objmap_msgs/Status.h>
+#include <nav_msgs/Path.h>
 #include <ros/ros.h>
+#include <ros/topic.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
 
+#include <cmath>
 #include <filesystem>
 #include <thread>
 
+#include "dataset/sequence_reader.h"
 #include "openni2/oni_file_writer.h"
+#include "ros_conversions.h"
 #include "ros_node/ros_fixture.h"
+#include "test_data.h"
 
 namespace objmap {
 namespace {
@@ -102,6 +110,76 @@ TEST_F(RosNodeCamera, PlaysARecordingIntoTheMap) {
   EXPECT_TRUE(node->running()) << "the node keeps serving after the recording ended";
   EXPECT_EQ(node->Stop(SIGINT), 0) << node->Log();
   EXPECT_NE(node->Log().find("ended; the map is still served"), std::string::npos);
+}
+
+// ~pose_source estimate: a recording of 20 redkitchen frames, no TF anywhere. The node tracks
+// the camera, maps every frame at its tracked pose, publishes map -> kitchen_camera on TF and
+// the keyframes on ~trajectory.
+TEST_F(RosNodeCamera, EstimatesThePosesOfARecordingAndPublishesThemOnTfAndAsAPath) {
+  const std::string folder = testing::SharedDataPath("redkitchen");
+  OBJMAP_REQUIRE_PATH(folder);
+  std::string why;
+  const auto reader = OpenSequence(folder, &why);
+  ASSERT_NE(reader, nullptr) << why;
+  constexpr int kFrames = 20;
+  testing::OniTestRecording recording;
+  recording.width = 640;
+  recording.height = 480;
+  recording.horizontal_fov_rad = static_cast<float>(2.0 * std::atan(320.0 / 585.0));
+  recording.vertical_fov_rad = static_cast<float>(2.0 * std::atan(240.0 / 585.0));
+  std::vector<Eigen::Isometry3d> reference;
+  for (int n = 0; n < kFrames; ++n) {
+    RgbdFrame frame;
+    ASSERT_TRUE(reader->ReadFrame(static_cast<std::size_t>(2 * n), &frame, &why)) << why;
+    testing::OniTestFrame oni;
+    oni.timestamp_us = 66667u * static_cast<std::uint64_t>(n + 1);
+    oni.rgb = frame.color.rgb;
+    for (const float z : frame.depth.depth_m) {
+      oni.depth_mm.push_back(z > 0.f ? static_cast<std::uint16_t>(std::lround(z * 1000.f)) : 0);
+    }
+    recording.frames.push_back(std::move(oni));
+    reference.push_back(frame.T_W_C);
+  }
+  const std::string path = (dir() / "kitchen.oni").string();
+  ASSERT_TRUE(testing::WriteOniFile(path, recording));
+
+  tf2_ros::Buffer tf_buffer;
+  tf2_ros::TransformListener tf_listener(tf_buffer);  // before the node publishes
+  auto node = StartNode("objmap_node_estimate",
+                        {"_openni2/oni_path:=" + path, "_pose_source:=estimate",
+                         "_camera_frame:=kitchen_camera", "_keyframes/every_nth_frame:=1"});
+  ASSERT_TRUE(WaitForService("/objmap_node_estimate/status", node.get())) << node->Log();
+  objmap_msgs::Status status;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(180);
+  while (ros::service::call("/objmap_node_estimate/status", status) &&
+         status.response.frames_received < kFrames && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  ASSERT_EQ(status.response.frames_received, kFrames) << node->Log();
+  EXPECT_EQ(status.response.frames_rejected, 0) << status.response.last_rejection;
+  EXPECT_EQ(status.response.keyframes, kFrames);
+
+  // TF holds the last frame's tracked pose; the map's origin is the first frame's camera.
+  geometry_msgs::TransformStamped last;
+  ASSERT_NO_THROW(last = tf_buffer.lookupTransform("map", "kitchen_camera", ros::Time(0),
+                                                   ros::Duration(5.0)));
+  Eigen::Isometry3d T_W_C;
+  ASSERT_TRUE(ros_bridge::TransformFromMsg(last.transform, "tf", &T_W_C, &why)) << why;
+  const Eigen::Isometry3d expected = reference.front().inverse() * reference.back();
+  EXPECT_LT((expected.inverse() * T_W_C).translation().norm(), 0.03) << T_W_C.matrix();
+
+  const auto trajectory = ros::topic::waitForMessage<nav_msgs::Path>(
+      "/objmap_node_estimate/trajectory", ros::Duration(10.0));
+  ASSERT_TRUE(trajectory);
+  ASSERT_EQ(trajectory->poses.size(), static_cast<std::size_t>(kFrames));
+  EXPECT_EQ(trajectory->header.frame_id, "map");
+  for (int n = 0; n < kFrames; ++n) {
+    Eigen::Isometry3d keyframe;
+    ASSERT_TRUE(ros_bridge::PoseFromMsg(trajectory->poses[n].pose, "path", &keyframe, &why));
+    const Eigen::Isometry3d truth = reference.front().inverse() * reference[n];
+    EXPECT_LT((truth.inverse() * keyframe).translation().norm(), 0.03) << "keyframe " << n;
+  }
+  EXPECT_EQ(node->Stop(SIGINT), 0) << node->Log();
 }
 
 // launch/objmap_openni2.launch with a recording and a static camera serves the map it makes.

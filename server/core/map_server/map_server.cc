@@ -143,7 +143,7 @@ std::unique_ptr<MapServer> MapServer::Open(const MapServerConfig& config,
   impl.heavy_query_threads = std::make_unique<TaskThreads>(heavy);
   if (config.pose_source == PoseSource::kEstimate) {
     impl.odometry = std::make_unique<RgbdOdometry>(config.odometry);
-    impl.ResumeTracking();
+    server->ResumeTracking();
   }
   // What this start had to integrate, the next one loads.
   impl.MaybeCheckpoint(/*force=*/true);
@@ -386,31 +386,39 @@ MapJob::Result MapServer::Impl::ApplyPoses(MapJob* job) {
   return out;
 }
 
-void MapServer::Impl::ResumeTracking() {
+ServiceStatus MapServer::NewestKeyframe(RgbdFrame* frame) const {
   KeyframeId newest = 0;
   {
-    std::lock_guard<std::mutex> lock(known_mutex);
-    if (known_keyframes.empty()) return;  // a new map: the first keyframe starts it
-    newest = *known_keyframes.rbegin();
+    std::lock_guard<std::mutex> lock(impl_->known_mutex);
+    if (impl_->known_keyframes.empty()) return ServiceStatus::NotFound("the map has no keyframe");
+    newest = *impl_->known_keyframes.rbegin();
   }
   StoredKeyframe stored;
   std::string why;
-  if (!store->LoadKeyframe(newest, &stored, &why)) {
-    tracking_blocked = "tracking cannot resume on the stored map: " + why;
-    return;
-  }
+  if (!impl_->store->LoadKeyframe(newest, &stored, &why)) return {StatusCode::kInternal, why};
+  *frame = RgbdFrame();
+  frame->stamp_s = stored.stamp_s;
+  frame->name = "stored keyframe " + std::to_string(newest);
+  frame->intrinsics = stored.intrinsics;
+  frame->T_W_C = stored.T_W_C;
+  frame->color = std::move(stored.color);
+  frame->depth.width = stored.intrinsics.width;
+  frame->depth.height = stored.intrinsics.height;
+  frame->depth.depth_m.reserve(stored.depth_mm.size());
+  for (const std::uint16_t mm : stored.depth_mm) frame->depth.depth_m.push_back(mm * 0.001f);
+  return ServiceStatus::Ok();
+}
+
+void MapServer::ResumeTracking() {
   RgbdFrame frame;
-  frame.name = "stored keyframe " + std::to_string(newest);
-  frame.intrinsics = stored.intrinsics;
-  frame.T_W_C = stored.T_W_C;
-  frame.color = std::move(stored.color);
-  frame.depth.width = stored.intrinsics.width;
-  frame.depth.height = stored.intrinsics.height;
-  frame.depth.depth_m.reserve(stored.depth_mm.size());
-  for (const std::uint16_t mm : stored.depth_mm) frame.depth.depth_m.push_back(mm * 0.001f);
-  if (!odometry->StartFromKnownPose(frame, &why)) {
-    tracking_blocked = "tracking cannot resume on the stored map (from keyframe " +
-                       std::to_string(newest) + "): " + why;
+  const ServiceStatus loaded = NewestKeyframe(&frame);
+  if (loaded.code == StatusCode::kNotFound) return;  // a new map: the first keyframe starts it
+  std::string why;
+  if (!loaded.ok()) {
+    impl_->tracking_blocked = "tracking cannot resume on the stored map: " + loaded.message;
+  } else if (!impl_->odometry->StartFromKnownPose(frame, &why)) {
+    impl_->tracking_blocked =
+        "tracking cannot resume on the stored map (from " + frame.name + "): " + why;
   }
 }
 
@@ -460,19 +468,13 @@ ServiceStatus MapServer::AddKeyframe(RgbdFrame frame,
   *outcome = std::move(result.keyframe);
   outcome->T_W_C = mapped_pose;
   if (!impl_->odometry) return result.status;
-  RgbdOdometry& odometry = *impl_->odometry;
-  impl_->tracked_keyframes[outcome->keyframe_id] = {
-      tracked.reference_keyframe,
-      odometry.KeyframePose(tracked.reference_keyframe).inverse() * tracked.T_W_C};
+  impl_->tracked_keyframes.Add(outcome->keyframe_id, tracked, *impl_->odometry);
   outcome->loops_closed = tracked.loops_closed;
   if (tracked.loops_closed == 0) return result.status;
   // A loop closed: every tracked keyframe follows the odometry keyframe it was tracked against.
-  std::map<KeyframeId, Eigen::Isometry3d> moved;
-  for (const auto& [id, on_keyframe] : impl_->tracked_keyframes) {
-    moved[id] = odometry.KeyframePose(on_keyframe.first) * on_keyframe.second;
-  }
   PoseUpdateOutcome update;
-  const ServiceStatus updated = UpdatePoses(moved, /*wait=*/false, &update);
+  const ServiceStatus updated =
+      UpdatePoses(impl_->tracked_keyframes.Poses(*impl_->odometry), /*wait=*/false, &update);
   if (!updated.ok()) {
     return {updated.code, "keyframe " + std::to_string(outcome->keyframe_id) +
                               " is mapped, but the poses of the loop it closed are not: " +

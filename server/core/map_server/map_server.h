@@ -223,6 +223,9 @@ class MapServer {
   /// regeneration; with `wait`, returns after it has been applied.
   /// True with PoseSource::kEstimate: AddKeyframe needs no pose.
   [[nodiscard]] bool estimates_poses() const;
+  /// The newest stored keyframe with its images and current pose (where a camera tracker
+  /// resumes after a restart); kNotFound on an empty map.
+  [[nodiscard]] ServiceStatus NewestKeyframe(RgbdFrame* frame) const;
   [[nodiscard]] ServiceStatus UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses,
                                           bool wait, PoseUpdateOutcome* outcome);
 
@@ -299,6 +302,8 @@ class MapServer {
   MapServer();
   struct Impl;
   std::unique_ptr<Impl> impl_;
+  // PoseSource::kEstimate: starts the odometry at the newest stored keyframe.
+  void ResumeTracking();
 };
 
 /// Checks a box: finite coordinates and min <= max on every axis; `field` names it in the reason.

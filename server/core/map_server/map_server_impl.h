@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "map_server/map_server.h"
+#include "odometry/tracked_keyframes.h"
 #include "map_server/task_threads.h"
 #include "map_server/snapshot_builder.h"
 
@@ -57,15 +58,12 @@ struct MapServer::Impl {
   std::atomic<bool> shutting_down{false};
   std::thread worker;
 
-  // PoseSource::kEstimate: the odometry, and each keyframe it tracked as (the odometry keyframe
-  // it was tracked against, its pose relative to that one): loop closures move the odometry
-  // keyframes and, through them, these. Held through a whole AddKeyframe: one camera, in order.
+  // PoseSource::kEstimate: the odometry, and the keyframes it placed (loop closures move them).
+  // tracking_mutex is held through a whole AddKeyframe: one camera, in order.
   std::mutex tracking_mutex;
   std::unique_ptr<RgbdOdometry> odometry;
-  std::map<KeyframeId, std::pair<int, Eigen::Isometry3d>> tracked_keyframes;
+  TrackedKeyframes tracked_keyframes;
   std::string tracking_blocked;  // why tracking cannot resume on the stored map (empty: it can)
-  // Tracking resumes from the newest stored keyframe (after a restart).
-  void ResumeTracking();
 
   // Keyframe ids committed to the store: UpdatePoses validates against them on any thread.
   mutable std::mutex known_mutex;
