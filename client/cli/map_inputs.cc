@@ -84,7 +84,12 @@ bool StreamSequence(const MapInputOptions& options, MapInput* input, std::string
   input->stream =
       SelectSequenceFrames(*input->sequence, options.first_frame, options.max_frames, why);
   input->selection_applied = true;
-  input->source_has_poses = true;
+  input->source_has_poses = input->sequence->has_poses();
+  if (!input->source_has_poses) {
+    // Only a bag without TF opened for --poses auto / estimate gets here.
+    input->estimate_poses = true;
+    input->note = "the bag has no /tf or /tf_static messages";
+  }
   return input->stream != nullptr;
 }
 

@@ -14,6 +14,8 @@ std::unique_ptr<SequenceReader> OpenBagInput(const std::string& path,
   config.pose_topic = options.bag_pose_topic;
   if (!options.world_frame.empty()) config.world_frame = options.world_frame;
   config.camera_frame = options.camera_frame;
+  // A bag without TF is mapped when the poses are estimated anyway (--poses auto or estimate).
+  config.poses_optional = options.estimate_poses || options.estimate_missing_poses;
   return OpenRosbagSequence(path, config, why);
 }
 

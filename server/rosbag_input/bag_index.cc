@@ -212,7 +212,11 @@ bool IndexBag(const rosbag::Bag& bag, const ChosenTopics& topics, const RosbagIn
                                     ? "pose on " + topics.pose
                                     : "transform from '" + StripSlash(camera_frame) + "' to '" +
                                           StripSlash(config.world_frame) + "' (/tf, /tf_static)";
-    LookUpPose(*buffer, config.world_frame, camera_frame, missing, &frame);
+    if (topics.without_poses) {
+      frame.pose_problem = "the bag has no /tf or /tf_static messages";
+    } else {
+      LookUpPose(*buffer, config.world_frame, camera_frame, missing, &frame);
+    }
     without_pose += frame.T_W_C ? 0 : 1;
     index->frames.push_back(std::move(frame));
   }
@@ -222,10 +226,15 @@ bool IndexBag(const rosbag::Bag& bag, const ChosenTopics& topics, const RosbagIn
            std::to_string(config.max_pair_interval_s) + " s";
     return false;
   }
+  index->without_poses = topics.without_poses;
   index->summary = std::to_string(index->frames.size()) + " frames (colour " + topics.color +
                    ", depth " + topics.depth + ", camera info " + topics.camera_info +
-                   "; poses from " + pose_source + " in frame '" + config.world_frame + "')";
-  if (without_pose > 0) index->summary += ", " + std::to_string(without_pose) + " without a pose";
+                   (topics.without_poses
+                        ? "; no poses: no /tf or /tf_static messages)"
+                        : "; poses from " + pose_source + " in frame '" + config.world_frame + "')");
+  if (without_pose > 0 && !topics.without_poses) {
+    index->summary += ", " + std::to_string(without_pose) + " without a pose";
+  }
   if (unpaired > 0) {
     index->summary += ", " + std::to_string(unpaired) +
                       " colour images without a depth image within " +

@@ -32,6 +32,7 @@ struct BagIndex {
   std::vector<IndexedFrame> frames;  ///< in colour stamp order
   std::vector<sensor_msgs::CameraInfo> camera_infos;
   std::string summary;  ///< topics, frame counts, colour images left out
+  bool without_poses = false;  ///< the bag has no pose source (ChosenTopics::without_poses)
 };
 
 /// Pairs every colour image with the nearest depth image (within config.max_pair_interval_s)

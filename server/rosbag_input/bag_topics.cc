@@ -174,6 +174,10 @@ bool ChooseTopics(const std::string& bag_path, const std::vector<BagTopic>& topi
   const bool has_tf = std::any_of(topics.begin(), topics.end(), [](const BagTopic& topic) {
     return topic.name == "/tf" || topic.name == "/tf_static";
   });
+  if (!has_tf && config.poses_optional) {
+    chosen->without_poses = true;
+    return true;
+  }
   if (!has_tf) {
     *why = bag_path +
            " has no /tf or /tf_static messages for the camera poses (or pass a "

@@ -23,6 +23,7 @@ struct BagTopic {
 /// The topics chosen for the frames; pose_topic empty means /tf and /tf_static.
 struct ChosenTopics {
   std::string color, depth, camera_info, pose;
+  bool without_poses = false;  // no pose source in the bag (RosbagInputConfig::poses_optional)
 };
 
 /// Every topic of `bag`, sorted by name.

@@ -32,6 +32,8 @@ class RosbagSequenceReader : public SequenceReader {
 
   std::string Describe() const override { return "rosbag " + path_ + ": " + index_.summary; }
 
+  bool has_poses() const override { return !index_.without_poses; }
+
   bool ReadFrame(std::size_t index, RgbdFrame* frame, std::string* why) const override {
     if (index >= index_.frames.size()) {
       *why = "frame index " + std::to_string(index) + " out of range";
@@ -40,7 +42,8 @@ class RosbagSequenceReader : public SequenceReader {
     const IndexedFrame& entry = index_.frames[index];
     const std::string name = path_ + " frame " + std::to_string(index) +
                              " (t=" + rosbag_input::StampText(entry.stamp) + ")";
-    if (!entry.T_W_C) {
+    // Without any pose source the caller estimates the poses: frames come at the identity.
+    if (!entry.T_W_C && !index_.without_poses) {
       *why = name + ": " + entry.pose_problem;
       return false;
     }
@@ -56,7 +59,8 @@ class RosbagSequenceReader : public SequenceReader {
       return false;
     }
     if (!ros_bridge::FrameFromMsgs(*color, *depth, index_.camera_infos[entry.camera_info],
-                                   *entry.T_W_C, config_.depth_scale, frame, why)) {
+                                   entry.T_W_C.value_or(Eigen::Isometry3d::Identity()),
+                                   config_.depth_scale, frame, why)) {
       *why = name + ": " + *why;
       return false;
     }

@@ -37,6 +37,10 @@ struct RosbagInputConfig {
   double max_pair_interval_s = 0.02;
   /// Metres per unit of 16UC1 / mono16 depth images (0.001: millimetres).
   double depth_scale = 0.001;
+  /// For a caller that estimates the poses itself: a bag without /tf, /tf_static (and without
+  /// pose_topic) opens, and its frames are read at the identity pose (has_poses() false). A bag
+  /// with TF keeps its poses, and a frame TF does not cover is still refused.
+  bool poses_optional = false;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
@@ -50,7 +54,8 @@ struct RosbagInputConfig {
 ///
 /// Returns nullptr and a reason for a missing file, a file that is not a bag, a topic that is
 /// not in the bag (the reason lists the bag's topics), an ambiguous or absent auto-detected
-/// topic, a bag without pose messages, and a bag in which no colour image pairs with a depth one.
+/// topic, a bag without pose messages (unless config.poses_optional), and a bag in which no
+/// colour image pairs with a depth one.
 [[nodiscard]] std::unique_ptr<SequenceReader> OpenRosbagSequence(const std::string& path,
                                                                  const RosbagInputConfig& config,
                                                                  std::string* why);

@@ -8,6 +8,9 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
+#include "dataset/sequence_reader.h"
+#include "dataset/trajectory.h"
+#include "evaluation/trajectory_evaluation.h"
 #include "run_objmap.h"
 #include "test_bags.h"
 #include "test_data.h"
@@ -165,6 +168,53 @@ TEST_F(RosbagMap, FrameWithoutTfIsSkippedWithTheTransformNamed) {
                             "(/tf, /tf_static) at t=100.200000000"),
             std::string::npos)
       << run.output;
+}
+
+// A bag with images and camera info but no /tf: `objmap map` (--poses auto) tracks the camera
+// instead of refusing the bag, writes the trajectory and maps with it; `--poses input` still
+// refuses it, naming what is missing.
+TEST_F(RosbagMap, ABagWithoutTfIsMappedWithEstimatedPoses) {
+  const std::string kitchen = objmap::testing::SharedDataPath("redkitchen");
+  OBJMAP_REQUIRE_PATH(kitchen);
+  std::string why;
+  const auto reader = OpenSequence(kitchen, &why);
+  ASSERT_NE(reader, nullptr) << why;
+  std::vector<RgbdFrame> frames;
+  std::vector<TrajectoryPose> reference;
+  for (std::size_t i = 0; i < 60; i += 3) {
+    RgbdFrame frame;
+    ASSERT_TRUE(reader->ReadFrame(i, &frame, &why)) << why;
+    reference.push_back({0.0, frame.T_W_C});
+    frames.push_back(std::move(frame));
+  }
+  objmap::testing::TestBagOptions options;
+  options.write_tf = false;
+  objmap::testing::WriteTestBag(Path("no_tf.bag"), frames, options);
+  std::ofstream(Path("detections.json")) << R"({"frames": {}})";
+
+  const CommandResult refused = RunObjmap("map " + Path("no_tf.bag") + " --out " + Path("in") +
+                                          " --detections " + Path("detections.json") +
+                                          " --poses input");
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_NE(refused.output.find("has no /tf or /tf_static messages for the camera poses"),
+            std::string::npos)
+      << refused.output;
+
+  const CommandResult run = RunObjmap("map " + Path("no_tf.bag") + " --out " + Path("out") +
+                                      " --detections " + Path("detections.json"));
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("the bag has no /tf or /tf_static messages; poses estimated by RGB-D "
+                            "odometry"),
+            std::string::npos)
+      << run.output;
+  std::vector<TrajectoryPose> estimated;
+  ASSERT_TRUE(ReadTumTrajectory(Path("out/trajectory.txt"), &estimated, &why)) << why;
+  ASSERT_EQ(estimated.size(), reference.size()) << run.output;
+  for (std::size_t i = 0; i < estimated.size(); ++i) reference[i].stamp_s = estimated[i].stamp_s;
+  TrajectoryErrors errors;
+  ASSERT_TRUE(EvaluateTrajectory(estimated, reference, {}, &errors, &why)) << why;
+  EXPECT_LT(errors.ate_rmse_m, 0.02);
+  EXPECT_TRUE(fs::exists(Path("out/map.bt")));
 }
 
 }  // namespace

@@ -23,6 +23,9 @@ class SequenceReader {
 
   /// "7-Scenes folder <path>, 1000 frames" and the like.
   [[nodiscard]] virtual std::string Describe() const = 0;
+  /// False when the frames come without poses of their own (a bag without TF opened for a
+  /// caller that estimates the poses): ReadFrame then gives them the identity.
+  [[nodiscard]] virtual bool has_poses() const { return true; }
 };
 
 /// Opens a sequence folder, recognising the layout: 7-Scenes / 3DMatch (frame-NNNNNN.*) or TUM
