@@ -52,10 +52,15 @@ bool EstimatePoses(const MapInputOptions& options, MapInput* input, std::string*
   input->estimate_poses = true;
   if (!options.odometry.IsValid(why)) return false;
   input->estimated = std::make_shared<EstimatedTrajectory>();
-  input->stream = WithEstimatedPoses(std::move(input->stream), options.odometry, input->estimated);
+  // With poses of its own the input keeps its world frame: the first frame's pose anchors the
+  // estimate, so that the map can be compared with (and scored against) the input's.
+  input->stream = WithEstimatedPoses(std::move(input->stream), options.odometry, input->estimated,
+                                     /*start_at_source_pose=*/input->source_has_poses);
   input->note += std::string(input->note.empty() ? "" : "; ") +
                  "poses estimated by RGB-D odometry" +
-                 (input->source_has_poses ? " (the input's own poses only score them)" : "");
+                 (input->source_has_poses
+                      ? " from the input's first pose (its other poses only score them)"
+                      : "");
   return true;
 }
 

@@ -8,13 +8,16 @@ namespace {
 class OdometryStream : public FrameStream {
  public:
   OdometryStream(std::unique_ptr<FrameStream> inner, const OdometryConfig& config,
-                 std::shared_ptr<EstimatedTrajectory> log)
-      : inner_(std::move(inner)), odometry_(config), log_(std::move(log)) {}
+                 std::shared_ptr<EstimatedTrajectory> log, bool start_at_source_pose)
+      : inner_(std::move(inner)),
+        odometry_(config),
+        log_(std::move(log)),
+        start_at_source_pose_(start_at_source_pose) {}
 
   FrameStatus Next(RgbdFrame* frame, std::string* why) override {
     const FrameStatus status = inner_->Next(frame, why);
     if (status != FrameStatus::kFrame) return status;
-    const TrackingReport report = odometry_.Track(*frame);
+    const TrackingReport report = Track(*frame);
     ++log_->frames;
     log_->tracking_ms += report.ms;
     if (report.status == TrackingStatus::kLost) {
@@ -47,9 +50,21 @@ class OdometryStream : public FrameStream {
   std::string Describe() const override { return inner_->Describe() + ", poses estimated"; }
 
  private:
+  TrackingReport Track(const RgbdFrame& frame) {
+    if (!start_at_source_pose_ || odometry_.num_keyframes() > 0) return odometry_.Track(frame);
+    TrackingReport report;
+    if (!odometry_.StartFromKnownPose(frame, &report.why)) return report;  // kLost, with why
+    report.status = TrackingStatus::kInitialized;
+    report.T_W_C = frame.T_W_C;
+    report.reference_keyframe = 0;
+    report.new_keyframe = true;
+    return report;
+  }
+
   std::unique_ptr<FrameStream> inner_;
   RgbdOdometry odometry_;
   std::shared_ptr<EstimatedTrajectory> log_;
+  bool start_at_source_pose_;
 };
 
 }  // namespace
@@ -66,8 +81,10 @@ std::vector<TrajectoryPose> FinalPoses(const EstimatedTrajectory& trajectory) {
 
 std::unique_ptr<FrameStream> WithEstimatedPoses(std::unique_ptr<FrameStream> inner,
                                                 const OdometryConfig& config,
-                                                std::shared_ptr<EstimatedTrajectory> log) {
-  return std::make_unique<OdometryStream>(std::move(inner), config, std::move(log));
+                                                std::shared_ptr<EstimatedTrajectory> log,
+                                                bool start_at_source_pose) {
+  return std::make_unique<OdometryStream>(std::move(inner), config, std::move(log),
+                                          start_at_source_pose);
 }
 
 }  // namespace objmap

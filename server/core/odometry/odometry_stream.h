@@ -35,13 +35,15 @@ struct EstimatedTrajectory {
 /// times its pose relative to it (`estimated` holds the poses as they were when tracked).
 [[nodiscard]] std::vector<TrajectoryPose> FinalPoses(const EstimatedTrajectory& trajectory);
 
-/// Frames of `inner` with T_W_C replaced by the odometry's estimate (the world frame is the first
-/// tracked frame's camera frame). A frame the odometry cannot track is a kBadFrame whose reason
+/// Frames of `inner` with T_W_C replaced by the odometry's estimate. The world frame is the first
+/// tracked frame's camera frame, or with `start_at_source_pose` the source's own world frame: the
+/// first frame keeps the pose it came with and the others are tracked from it (a dataset whose
+/// poses only score the estimate: maps and scores then share its frame). A frame the odometry cannot track is a kBadFrame whose reason
 /// starts "tracking lost: ", so that the runner skips it with the reason and no wild pose enters
 /// the map. Stamps: the frame's, or frame_index / 30 s where the source has none. `log`
 /// (not null) receives the trajectories as frames pass.
 [[nodiscard]] std::unique_ptr<FrameStream> WithEstimatedPoses(
     std::unique_ptr<FrameStream> inner, const OdometryConfig& config,
-    std::shared_ptr<EstimatedTrajectory> log);
+    std::shared_ptr<EstimatedTrajectory> log, bool start_at_source_pose = false);
 
 }  // namespace objmap
