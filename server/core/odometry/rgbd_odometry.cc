@@ -37,6 +37,7 @@ struct Keyframe {
   Eigen::Isometry3d T_W_K = Eigen::Isometry3d::Identity();
   std::vector<cv::Point3f> points_K;
   cv::Mat descriptors;
+  cv::Mat strongest_descriptors;  // its appearance: the strongest keypoints with depth
   DepthGrid coarse_depth;
   DepthGrid fine_depth;
 };
@@ -52,6 +53,23 @@ struct PoseFit {
   double depth_rmse_m = 0.0;
   std::string why;
 };
+
+// The descriptors of the `count` keypoints with depth and the strongest response: a frame's
+// appearance, cheap to compare with another's.
+cv::Mat StrongestDescriptors(const FrameFeatures& features, int count) {
+  std::vector<int> order;
+  for (std::size_t i = 0; i < features.keypoints.size(); ++i) {
+    if (features.valid[i]) order.push_back(static_cast<int>(i));
+  }
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    return features.keypoints[static_cast<std::size_t>(a)].response >
+           features.keypoints[static_cast<std::size_t>(b)].response;
+  });
+  if (static_cast<int>(order.size()) > count) order.resize(static_cast<std::size_t>(count));
+  cv::Mat strongest;
+  for (int i : order) strongest.push_back(features.descriptors.row(i));
+  return strongest;
+}
 
 Eigen::Isometry3d FromRvecTvec(const cv::Mat& rvec, const cv::Mat& tvec) {
   cv::Mat R;
@@ -85,6 +103,10 @@ bool OdometryConfig::IsValid(std::string* why) const {
     *why =
         "odometry: step and keyframe limits must be positive, keyframe_min_inliers >= "
         "min_inliers and relocalisation_keyframes >= 0";
+    return false;
+  }
+  if (loop_appearance_candidates < 0 || appearance_descriptors < 2) {
+    *why = "odometry: loop_appearance_candidates must be >= 0 and appearance_descriptors >= 2";
     return false;
   }
   if (depth_refinement &&
@@ -141,6 +163,9 @@ struct RgbdOdometry::Impl {
   std::vector<PoseGraphEdge> edges;
   int loops_closed = 0;
   void AddOdometryEdge(int from, int to);
+  // Older keyframes (at least loop_min_keyframe_gap before `newest`, not in `already`) that look
+  // most like the frame, best first, up to loop_appearance_candidates.
+  std::vector<int> AppearanceCandidates(int newest, const std::vector<int>& already);
   // Tries the older keyframes near the newest one; for each that tracks it (PnP, enough
   // inliers), a loop edge; then optimizes the graph and moves every keyframe. Returns the loops
   // kept.
@@ -164,6 +189,33 @@ void RgbdOdometry::Impl::AddOdometryEdge(int from, int to) {
   edges.push_back(edge);
 }
 
+std::vector<int> RgbdOdometry::Impl::AppearanceCandidates(int newest,
+                                                          const std::vector<int>& already) {
+  if (config.loop_appearance_candidates <= 0) return {};
+  const cv::Mat& mine = keyframes[static_cast<std::size_t>(newest)].strongest_descriptors;
+  if (mine.rows < 2) return {};
+  std::vector<std::pair<int, int>> scored;  // (matches, keyframe)
+  for (int k = 0; k + config.loop_min_keyframe_gap <= newest; ++k) {
+    if (std::find(already.begin(), already.end(), k) != already.end()) continue;
+    const cv::Mat& theirs = keyframes[static_cast<std::size_t>(k)].strongest_descriptors;
+    if (theirs.rows < 2) continue;
+    std::vector<std::vector<cv::DMatch>> knn;
+    matcher.knnMatch(mine, theirs, knn, 2);
+    int matches = 0;
+    for (const auto& pair : knn) {
+      matches += pair.size() == 2 && pair[0].distance < config.match_ratio * pair[1].distance;
+    }
+    if (matches >= config.loop_min_inliers) scored.emplace_back(matches, k);
+  }
+  std::sort(scored.rbegin(), scored.rend());
+  std::vector<int> best;
+  for (std::size_t i = 0;
+       i < scored.size() && static_cast<int>(i) < config.loop_appearance_candidates; ++i) {
+    best.push_back(scored[i].second);
+  }
+  return best;
+}
+
 int RgbdOdometry::Impl::CloseLoops(const FrameFeatures& features, const CameraIntrinsics& K) {
   if (config.loop_candidates <= 0) return 0;
   const int newest = static_cast<int>(keyframes.size()) - 1;
@@ -177,9 +229,13 @@ int RgbdOdometry::Impl::CloseLoops(const FrameFeatures& features, const CameraIn
     }
   }
   std::sort(near.begin(), near.end());
-  int added = 0;
+  std::vector<int> candidates;
   for (std::size_t c = 0; c < near.size() && static_cast<int>(c) < config.loop_candidates; ++c) {
-    const int k = near[c].second;
+    candidates.push_back(near[c].second);
+  }
+  for (int k : AppearanceCandidates(newest, candidates)) candidates.push_back(k);
+  int added = 0;
+  for (const int k : candidates) {
     const Keyframe& old = keyframes[static_cast<std::size_t>(k)];
     const PoseFit fit = Fit(features, old, K);
     if (!fit.ok || fit.inliers < config.loop_min_inliers) continue;
@@ -260,6 +316,7 @@ void RgbdOdometry::Impl::AddKeyframe(const FrameFeatures& features,
                                      const Eigen::Isometry3d& T_W_C) {
   Keyframe keyframe;
   keyframe.T_W_K = T_W_C;
+  keyframe.strongest_descriptors = StrongestDescriptors(features, config.appearance_descriptors);
   keyframe.coarse_depth = features.coarse_depth;
   keyframe.fine_depth = features.fine_depth;
   for (std::size_t i = 0; i < features.keypoints.size(); ++i) {
@@ -507,7 +564,9 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
     report.new_keyframe = true;
     report.reference_keyframe = impl.current_keyframe;
     impl.AddOdometryEdge(reference_keyframe, impl.current_keyframe);
+    const auto loop_start = Clock::now();
     report.loops_closed = impl.CloseLoops(features, frame.intrinsics);
+    report.loop_ms = std::chrono::duration<double, std::milli>(Clock::now() - loop_start).count();
     if (report.loops_closed > 0) {
       report.T_W_C = impl.keyframes.back().T_W_K;
       impl.last_T_W_C = report.T_W_C;

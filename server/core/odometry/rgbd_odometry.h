@@ -45,6 +45,13 @@ struct OdometryConfig {
   double loop_search_radius_m = 1.0;
   double loop_search_angle_deg = 45.0;
   int loop_min_inliers = 60;
+  /// Loop candidates by appearance, wherever the drifted pose estimate puts them: the older
+  /// keyframes whose strongest appearance_descriptors ORB descriptors match most of the new
+  /// keyframe's (at least loop_min_inliers matches), up to loop_appearance_candidates of them
+  /// besides those near the estimate; verified like the others (PnP, ICP, the pose graph's
+  /// robust loss). 0: candidates by pose only.
+  int loop_appearance_candidates = 2;
+  int appearance_descriptors = 300;
   /// Standard deviations of a keyframe-to-keyframe measurement (odometry and loop edges).
   double edge_sigma_m = 0.01;
   double edge_sigma_deg = 0.5;
@@ -90,6 +97,7 @@ struct TrackingReport {
   int reference_keyframe = -1;        ///< index of the keyframe tracked against
   bool new_keyframe = false;          ///< this frame became a keyframe (reference_keyframe)
   int loops_closed = 0;               ///< loop edges added with it (every keyframe then moved)
+  double loop_ms = 0.0;  ///< of `ms`: loop-closure detection, verification and graph solve
   double ms = 0.0;                    ///< time spent
   std::string why;                    ///< kLost: the reason
 };
