@@ -91,27 +91,16 @@ TEST_F(MapOpenNI2, ARecordingWithoutTrajectoryIsMappedWithEstimatedPoses) {
   std::string why;
   const auto reader = OpenSequence(folder, &why);
   ASSERT_NE(reader, nullptr) << why;
-  // 20 redkitchen frames (every second of the first 40) recorded as a camera would: 640 x 480,
-  // the field of view of its 585 px focal length, 1 mm depth units.
-  testing::OniTestRecording recording;
-  recording.width = 640;
-  recording.height = 480;
-  recording.horizontal_fov_rad = static_cast<float>(2.0 * std::atan(320.0 / 585.0));
-  recording.vertical_fov_rad = static_cast<float>(2.0 * std::atan(240.0 / 585.0));
+  // 20 redkitchen frames (every second of the first 40) recorded as a camera would.
+  std::vector<RgbdFrame> frames;
   std::vector<TrajectoryPose> reference;
   for (int n = 0; n < 20; ++n) {
     RgbdFrame frame;
     ASSERT_TRUE(reader->ReadFrame(static_cast<std::size_t>(2 * n), &frame, &why)) << why;
-    testing::OniTestFrame oni;
-    oni.timestamp_us = 66667u * static_cast<std::uint64_t>(n + 1);
-    oni.rgb = frame.color.rgb;
-    oni.depth_mm.reserve(frame.depth.depth_m.size());
-    for (const float z : frame.depth.depth_m) {
-      oni.depth_mm.push_back(z > 0.f ? static_cast<std::uint16_t>(std::lround(z * 1000.f)) : 0);
-    }
-    recording.frames.push_back(std::move(oni));
     reference.push_back({0.0, frame.T_W_C});
+    frames.push_back(std::move(frame));
   }
+  const testing::OniTestRecording recording = testing::RecordingOf(frames, 66667);
   ASSERT_TRUE(testing::WriteOniFile(Path("kitchen.oni"), recording));
   const CommandResult result = RunObjmap("map " + Path("kitchen.oni") + " --out " + Path("out") +
                                          " --detections " + Path("detections.json"));

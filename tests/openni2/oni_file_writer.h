@@ -7,11 +7,14 @@
 // openni::Recorder cannot make these here: the only device without hardware, DummyDevice, reports
 // no cropping property, and the player drops every frame of a node recorded without one.
 
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <string>
 #include <vector>
+
+#include "types/frame.h"
 
 namespace objmap::testing {
 
@@ -130,6 +133,31 @@ inline void WriteNode(std::ofstream& out, std::uint32_t node, bool is_depth,
 }
 
 }  // namespace oni_detail
+
+/// `frames` (same size and intrinsics, depth in metres) as a camera would record them: the field
+/// of view of their focal lengths, 1 mm depth units, `frame_interval_us` apart (the first one
+/// interval after 0).
+inline OniTestRecording RecordingOf(const std::vector<RgbdFrame>& frames,
+                                    std::uint64_t frame_interval_us) {
+  OniTestRecording recording;
+  if (frames.empty()) return recording;
+  const CameraIntrinsics& K = frames.front().intrinsics;
+  recording.width = K.width;
+  recording.height = K.height;
+  recording.horizontal_fov_rad = static_cast<float>(2.0 * std::atan(0.5 * K.width / K.fx));
+  recording.vertical_fov_rad = static_cast<float>(2.0 * std::atan(0.5 * K.height / K.fy));
+  for (std::size_t n = 0; n < frames.size(); ++n) {
+    OniTestFrame oni;
+    oni.timestamp_us = frame_interval_us * (n + 1);
+    oni.rgb = frames[n].color.rgb;
+    oni.depth_mm.reserve(frames[n].depth.depth_m.size());
+    for (const float z : frames[n].depth.depth_m) {
+      oni.depth_mm.push_back(z > 0.f ? static_cast<std::uint16_t>(std::lround(z * 1000.f)) : 0);
+    }
+    recording.frames.push_back(std::move(oni));
+  }
+  return recording;
+}
 
 /// `count` frames 1/30 s apart (the first at 1/30 s) of a camera facing a flat wall
 /// `depth_mm` away, every colour pixel grey `gray`.

@@ -122,24 +122,15 @@ TEST_F(RosNodeCamera, EstimatesThePosesOfARecordingAndPublishesThemOnTfAndAsAPat
   const auto reader = OpenSequence(folder, &why);
   ASSERT_NE(reader, nullptr) << why;
   constexpr int kFrames = 20;
-  testing::OniTestRecording recording;
-  recording.width = 640;
-  recording.height = 480;
-  recording.horizontal_fov_rad = static_cast<float>(2.0 * std::atan(320.0 / 585.0));
-  recording.vertical_fov_rad = static_cast<float>(2.0 * std::atan(240.0 / 585.0));
+  std::vector<RgbdFrame> frames;
   std::vector<Eigen::Isometry3d> reference;
   for (int n = 0; n < kFrames; ++n) {
     RgbdFrame frame;
     ASSERT_TRUE(reader->ReadFrame(static_cast<std::size_t>(2 * n), &frame, &why)) << why;
-    testing::OniTestFrame oni;
-    oni.timestamp_us = 66667u * static_cast<std::uint64_t>(n + 1);
-    oni.rgb = frame.color.rgb;
-    for (const float z : frame.depth.depth_m) {
-      oni.depth_mm.push_back(z > 0.f ? static_cast<std::uint16_t>(std::lround(z * 1000.f)) : 0);
-    }
-    recording.frames.push_back(std::move(oni));
     reference.push_back(frame.T_W_C);
+    frames.push_back(std::move(frame));
   }
+  const testing::OniTestRecording recording = testing::RecordingOf(frames, 66667);
   const std::string path = (dir() / "kitchen.oni").string();
   ASSERT_TRUE(testing::WriteOniFile(path, recording));
 
