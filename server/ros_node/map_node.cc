@@ -286,18 +286,13 @@ void MapNode::Impl::ReadCameraLoop() {
 }
 
 void MapNode::Impl::ResumeTracking() {
-  RgbdFrame newest;
-  const ServiceStatus loaded = server->NewestKeyframe(&newest);
-  if (loaded.code == StatusCode::kNotFound) return;  // a new map: the first frame starts it
-  std::string why;
-  if (!loaded.ok()) {
-    tracking_blocked = "tracking cannot resume on the stored map: " + loaded.message;
-  } else if (!odometry->StartFromKnownPose(newest, &why)) {
-    tracking_blocked = "tracking cannot resume on the stored map (from " + newest.name + "): " + why;
-  } else {
-    ROS_INFO_STREAM("objmap_node: tracking resumes from " << newest.name);
+  std::string resumed_from;
+  tracking_blocked = server->StartTrackingOnStoredMap(odometry.get(), &resumed_from).message;
+  if (!tracking_blocked.empty()) {
+    ROS_ERROR_STREAM("objmap_node: " << tracking_blocked);
+  } else if (!resumed_from.empty()) {
+    ROS_INFO_STREAM("objmap_node: tracking resumes from " << resumed_from);
   }
-  if (!tracking_blocked.empty()) ROS_ERROR_STREAM("objmap_node: " << tracking_blocked);
 }
 
 bool MapNode::Impl::TrackFrame(RgbdFrame* frame, const ros::Time& stamp,

@@ -143,7 +143,9 @@ std::unique_ptr<MapServer> MapServer::Open(const MapServerConfig& config,
   impl.heavy_query_threads = std::make_unique<TaskThreads>(heavy);
   if (config.pose_source == PoseSource::kEstimate) {
     impl.odometry = std::make_unique<RgbdOdometry>(config.odometry);
-    server->ResumeTracking();
+    std::string resumed_from;
+    impl.tracking_blocked =
+        server->StartTrackingOnStoredMap(impl.odometry.get(), &resumed_from).message;
   }
   // What this start had to integrate, the next one loads.
   impl.MaybeCheckpoint(/*force=*/true);
@@ -409,17 +411,22 @@ ServiceStatus MapServer::NewestKeyframe(RgbdFrame* frame) const {
   return ServiceStatus::Ok();
 }
 
-void MapServer::ResumeTracking() {
+ServiceStatus MapServer::StartTrackingOnStoredMap(RgbdOdometry* odometry,
+                                                  std::string* resumed_from) const {
   RgbdFrame frame;
   const ServiceStatus loaded = NewestKeyframe(&frame);
-  if (loaded.code == StatusCode::kNotFound) return;  // a new map: the first keyframe starts it
+  if (loaded.code == StatusCode::kNotFound) return ServiceStatus::Ok();
   std::string why;
   if (!loaded.ok()) {
-    impl_->tracking_blocked = "tracking cannot resume on the stored map: " + loaded.message;
-  } else if (!impl_->odometry->StartFromKnownPose(frame, &why)) {
-    impl_->tracking_blocked =
-        "tracking cannot resume on the stored map (from " + frame.name + "): " + why;
+    return {StatusCode::kFailedPrecondition,
+            "tracking cannot resume on the stored map: " + loaded.message};
   }
+  if (!odometry->StartFromKnownPose(frame, &why)) {
+    return {StatusCode::kFailedPrecondition,
+            "tracking cannot resume on the stored map (from " + frame.name + "): " + why};
+  }
+  *resumed_from = frame.name;
+  return ServiceStatus::Ok();
 }
 
 bool MapServer::estimates_poses() const { return impl_->odometry != nullptr; }

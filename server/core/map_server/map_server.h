@@ -226,6 +226,12 @@ class MapServer {
   /// The newest stored keyframe with its images and current pose (where a camera tracker
   /// resumes after a restart); kNotFound on an empty map.
   [[nodiscard]] ServiceStatus NewestKeyframe(RgbdFrame* frame) const;
+  /// Starts `odometry` (not yet started) at the newest stored keyframe, so that tracking goes on
+  /// in the stored map's frame after a restart; `resumed_from` names that keyframe. On an empty
+  /// map: Ok and nothing done (the first frame starts the map). kFailedPrecondition with the
+  /// reason when the keyframe cannot be read or tracked from.
+  [[nodiscard]] ServiceStatus StartTrackingOnStoredMap(RgbdOdometry* odometry,
+                                                       std::string* resumed_from) const;
   [[nodiscard]] ServiceStatus UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses,
                                           bool wait, PoseUpdateOutcome* outcome);
 
@@ -302,8 +308,6 @@ class MapServer {
   MapServer();
   struct Impl;
   std::unique_ptr<Impl> impl_;
-  // PoseSource::kEstimate: starts the odometry at the newest stored keyframe.
-  void ResumeTracking();
 };
 
 /// Checks a box: finite coordinates and min <= max on every axis; `field` names it in the reason.

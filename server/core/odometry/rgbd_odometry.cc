@@ -154,6 +154,9 @@ struct RgbdOdometry::Impl {
   PoseFit Fit(const FrameFeatures& features, const Keyframe& keyframe,
               const CameraIntrinsics& K) ;
   void AddKeyframe(const FrameFeatures& features, const Eigen::Isometry3d& T_W_C);
+  // The first keyframe, at T_W_C: tracking starts from it. False when too few keypoints have
+  // depth.
+  bool Start(const FrameFeatures& features, const Eigen::Isometry3d& T_W_C, std::string* why);
   // Dense step after PnP: moves T_K_C when the depth alignment succeeds within the limits.
   void RefineByDepth(const FrameFeatures& features, const Keyframe& keyframe,
                      Eigen::Isometry3d* T_K_C, PoseFit* fit) const;
@@ -328,6 +331,20 @@ void RgbdOdometry::Impl::AddKeyframe(const FrameFeatures& features,
   current_keyframe = static_cast<int>(keyframes.size()) - 1;
 }
 
+bool RgbdOdometry::Impl::Start(const FrameFeatures& features, const Eigen::Isometry3d& T_W_C,
+                               std::string* why) {
+  const auto with_depth = std::count(features.valid.begin(), features.valid.end(), std::uint8_t{1});
+  if (with_depth < config.min_inliers) {
+    *why = std::to_string(with_depth) + " keypoints with depth, " +
+           std::to_string(config.min_inliers) + " needed to start";
+    return false;
+  }
+  AddKeyframe(features, T_W_C);
+  has_last = true;
+  last_T_W_C = T_W_C;
+  return true;
+}
+
 void RgbdOdometry::Impl::RefineByDepth(const FrameFeatures& features, const Keyframe& keyframe,
                                        Eigen::Isometry3d* T_K_C, PoseFit* fit) const {
   std::vector<const DepthGrid*> model_levels, frame_levels;
@@ -435,18 +452,7 @@ bool RgbdOdometry::StartFromKnownPose(const RgbdFrame& frame, std::string* why) 
     return false;
   }
   FrameFeatures features;
-  if (!impl.Extract(frame, &features, why)) return false;
-  const int with_depth = static_cast<int>(
-      std::count(features.valid.begin(), features.valid.end(), std::uint8_t{1}));
-  if (with_depth < impl.config.min_inliers) {
-    *why = std::to_string(with_depth) + " keypoints with depth, " +
-           std::to_string(impl.config.min_inliers) + " needed to start";
-    return false;
-  }
-  impl.AddKeyframe(features, frame.T_W_C);
-  impl.has_last = true;
-  impl.last_T_W_C = frame.T_W_C;
-  return true;
+  return impl.Extract(frame, &features, why) && impl.Start(features, frame.T_W_C, why);
 }
 
 int RgbdOdometry::num_keyframes() const { return static_cast<int>(impl_->keyframes.size()); }
@@ -467,14 +473,7 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
       std::count(features.valid.begin(), features.valid.end(), std::uint8_t{1}));
 
   if (impl.keyframes.empty()) {
-    if (with_depth < config.min_inliers) {
-      report.why = std::to_string(with_depth) + " keypoints with depth, " +
-                   std::to_string(config.min_inliers) + " needed to start";
-      return finish();
-    }
-    impl.AddKeyframe(features, Eigen::Isometry3d::Identity());
-    impl.has_last = true;
-    impl.last_T_W_C = Eigen::Isometry3d::Identity();
+    if (!impl.Start(features, Eigen::Isometry3d::Identity(), &report.why)) return finish();
     report.status = TrackingStatus::kInitialized;
     report.new_keyframe = true;
     report.reference_keyframe = impl.current_keyframe;
