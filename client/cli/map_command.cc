@@ -68,6 +68,10 @@ constexpr char kMapUsage[] =
     "                            dataset, the estimate is scored against its poses (ATE, RPE)\n"
     "                            and written to <out>/trajectory.txt; auto (default): estimate\n"
     "                            for a camera or .oni without --trajectory, else input\n"
+    "  --object-constraints on|off  estimated poses: re-observed objects tie the keyframes\n"
+    "                            that saw them into the pose graph, solved again after the\n"
+    "                            run (default off: on redkitchen it raised the ATE,\n"
+    "                            docs/evaluation.md)\n"
     "  --min-translation M       keyframe after this much motion, metres (keyframes section)\n"
     "  --min-rotation DEG        keyframe after this much rotation, degrees (keyframes section)\n"
     "  --every-frame             every frame is a keyframe\n"
@@ -286,11 +290,75 @@ std::string ScoreAgainstInput(const std::vector<TrajectoryPose>& poses,
   return text;
 }
 
+// Moves the mapped keyframes to the trajectory's poses (a pose-graph update: the map is
+// regenerated).
+bool MoveMappedKeyframes(const std::vector<TrajectoryPose>& final_poses,
+                         const EstimatedTrajectory& trajectory, const SequenceRunReport& report,
+                         Mapper* mapper, PoseUpdateReport* update, std::string* why) {
+  std::map<std::int64_t, Eigen::Isometry3d> by_frame;
+  for (std::size_t i = 0; i < final_poses.size(); ++i) {
+    by_frame[trajectory.frame_index[i]] = final_poses[i].T_W_C;
+  }
+  std::map<KeyframeId, Eigen::Isometry3d> poses;
+  for (const KeyframeReport& keyframe : report.keyframes) {
+    const auto it = by_frame.find(static_cast<std::int64_t>(keyframe.frame_index));
+    if (it != by_frame.end()) poses[keyframe.result.keyframe_id] = it->second;
+  }
+  return poses.empty() || mapper->UpdatePoses(poses, why, update);
+}
+
+// Re-observed objects tie the keyframes that saw them (ObjectConstraints): their edges join the
+// odometry's pose graph, which is solved again, and the map follows. Returns false only when
+// the map update fails; a graph without object edges leaves everything as it is.
+bool ConstrainByObjects(const ObjectConstraintConfig& config, const SequenceRunReport& report,
+                        EstimatedTrajectory* trajectory, Mapper* mapper, std::string* why) {
+  std::map<KeyframeId, std::int64_t> frame_of;
+  for (const KeyframeReport& keyframe : report.keyframes) {
+    frame_of[keyframe.result.keyframe_id] = static_cast<std::int64_t>(keyframe.frame_index);
+  }
+  const auto anchor_of = [&](KeyframeId id) -> std::optional<KeyframeAnchor> {
+    const auto it = frame_of.find(id);
+    if (it == frame_of.end()) return std::nullopt;
+    return AnchorOfFrame(*trajectory, it->second);
+  };
+  std::vector<const MapObject*> objects;
+  for (const auto& [id, object] : mapper->objects().objects()) objects.push_back(&object);
+  ObjectConstraintReport found;
+  const std::vector<PoseGraphEdge> edges = ObjectConstraints(objects, anchor_of, config, &found);
+  std::printf(
+      "object constraints: %d objects with distant views, %d view pairs aligned, %d "
+      "constraints (%.0f ms)",
+      found.groups, found.pairs_tried, found.constraints, found.ms);
+  if (edges.empty()) {
+    std::printf("\n");
+    return true;
+  }
+  const std::size_t edges_before = trajectory->graph_edges.size();
+  PoseGraphReport solved;
+  std::string unsolved;
+  if (!ConstrainTrajectory(edges, trajectory, &solved, &unsolved)) {
+    std::printf("; pose graph not solved (%s), poses kept\n", unsolved.c_str());
+    return true;
+  }
+  const int rejected = static_cast<int>(
+      std::count_if(solved.rejected_loops.begin(), solved.rejected_loops.end(),
+                    [&](int e) { return static_cast<std::size_t>(e) >= edges_before; }));
+  std::printf(", %d rejected by the graph (%.0f ms)\n", rejected, solved.solve_ms);
+  PoseUpdateReport update;
+  if (!MoveMappedKeyframes(FinalPoses(*trajectory), *trajectory, report, mapper, &update, why)) {
+    return false;
+  }
+  std::printf("object constraints: %d keyframes of the map moved, map regenerated\n",
+              update.keyframes_moved);
+  return true;
+}
+
 // After a run with estimated poses: moves the mapped keyframes to their poses after every loop
-// closure (a pose-graph update, which regenerates the map), prints how tracking went and, when
-// the input had poses of its own, the estimate's errors against them; writes the final
-// trajectory.
-bool FinishEstimatedTrajectory(const EstimatedTrajectory& trajectory, bool source_has_poses,
+// closure and the object constraints (pose-graph updates, which regenerate the map), prints how
+// tracking went and, when the input had poses of its own, the estimate's errors against them;
+// writes the final trajectory.
+bool FinishEstimatedTrajectory(EstimatedTrajectory trajectory, bool source_has_poses,
+                               const ObjectConstraintConfig* object_constraints,
                                const SequenceRunReport& report, Mapper* mapper,
                                const std::string& path, std::string* why) {
   std::printf(
@@ -299,27 +367,27 @@ bool FinishEstimatedTrajectory(const EstimatedTrajectory& trajectory, bool sourc
       trajectory.frames, trajectory.frames - trajectory.lost, trajectory.lost,
       trajectory.relocalized, trajectory.loops_closed,
       trajectory.tracking_ms / std::max(1, trajectory.frames));
-  const std::vector<TrajectoryPose> final_poses = FinalPoses(trajectory);
+  const std::vector<TrajectoryPose> loop_poses = FinalPoses(trajectory);
   if (trajectory.loops_closed > 0) {
-    std::map<std::int64_t, Eigen::Isometry3d> by_frame;
-    for (std::size_t i = 0; i < final_poses.size(); ++i) {
-      by_frame[trajectory.frame_index[i]] = final_poses[i].T_W_C;
-    }
-    std::map<KeyframeId, Eigen::Isometry3d> poses;
-    for (const KeyframeReport& keyframe : report.keyframes) {
-      const auto it = by_frame.find(static_cast<std::int64_t>(keyframe.frame_index));
-      if (it != by_frame.end()) poses[keyframe.result.keyframe_id] = it->second;
-    }
     PoseUpdateReport update;
-    if (!poses.empty() && !mapper->UpdatePoses(poses, why, &update)) return false;
+    if (!MoveMappedKeyframes(loop_poses, trajectory, report, mapper, &update, why)) return false;
     std::printf("loop closures: %d keyframes of the map moved, map regenerated\n",
                 update.keyframes_moved);
   }
+  if (object_constraints != nullptr &&
+      !ConstrainByObjects(*object_constraints, report, &trajectory, mapper, why)) {
+    return false;
+  }
+  const std::vector<TrajectoryPose> final_poses = FinalPoses(trajectory);
   if (source_has_poses) {
     std::printf("odometry against the input's poses, as tracked: %s\n",
                 ScoreAgainstInput(trajectory.estimated, trajectory.source).c_str());
     std::printf("odometry against the input's poses, after loop closures: %s\n",
-                ScoreAgainstInput(final_poses, trajectory.source).c_str());
+                ScoreAgainstInput(loop_poses, trajectory.source).c_str());
+    if (object_constraints != nullptr) {
+      std::printf("odometry against the input's poses, after object constraints: %s\n",
+                  ScoreAgainstInput(final_poses, trajectory.source).c_str());
+    }
   }
   std::error_code ignored;  // a folder that cannot be made shows as the file not written
   std::filesystem::create_directories(std::filesystem::path(path).parent_path(), ignored);
@@ -392,7 +460,8 @@ int RunMapCommand(int argc, char** argv) {
       {"--out", "--config", "--set", "--model", "--detections", "--save-detections",
        "--score-threshold", "--first-frame", "--max-frames", "--min-translation", "--min-rotation",
        "--every-nth-frame", "--min-observations", "--min-confidence", "--min-evidence",
-       "--corrected-poses", "--trajectory", "--trajectory-tolerance", "--poses"});
+       "--corrected-poses", "--trajectory", "--trajectory-tolerance", "--poses",
+       "--object-constraints"});
   flags_with_value.merge(MapBagFlags());
   Arguments args(static_cast<int>(words.size()), words.data(), flags_with_value,
                  {"--every-frame", "--stop-on-error", "--print-config", "--help"});
@@ -412,6 +481,12 @@ int RunMapCommand(int argc, char** argv) {
   mapper_config.occupancy_second_copy = false;
   SequenceRunConfig run_config = RunConfigFrom(args, objmap_config);
   const MapInputOptions input_options = InputOptionsFrom(args, run_config);
+  const std::string object_constraints_flag = args.Get("--object-constraints", "off");
+  if (object_constraints_flag != "on" && object_constraints_flag != "off") {
+    args.SetError("--object-constraints must be on or off, not " + object_constraints_flag);
+  }
+  const bool object_constraints = object_constraints_flag == "on";
+  const ObjectConstraintConfig object_constraint_config;
   if (!args.error().empty() || args.positional().size() != 1 || !args.Has("--out")) {
     std::cerr << (args.error().empty() ? "" : args.error() + "\n") << kMapUsage << kMapBagUsage;
     return 2;
@@ -450,7 +525,9 @@ int RunMapCommand(int argc, char** argv) {
     return Fail(why);
   }
   if (input.estimated &&
-      !FinishEstimatedTrajectory(*input.estimated, input.source_has_poses, report, &mapper,
+      !FinishEstimatedTrajectory(*input.estimated, input.source_has_poses,
+                                 object_constraints ? &object_constraint_config : nullptr, report,
+                                 &mapper,
                                  args.Get("--out", "") + "/trajectory.txt", &why)) {
     return Fail(why);
   }

@@ -1,5 +1,6 @@
 #include "odometry/odometry_stream.h"
 
+#include <algorithm>
 #include <utility>
 
 namespace objmap {
@@ -37,6 +38,7 @@ class OdometryStream : public FrameStream {
       for (int k = 0; k < odometry_.num_keyframes(); ++k) {
         log_->keyframe_poses[static_cast<std::size_t>(k)] = odometry_.KeyframePose(k);
       }
+      log_->graph_edges = odometry_.graph_edges();
     }
     log_->frame_index.push_back(frame->frame_index);
     log_->reference_keyframe.push_back(report.reference_keyframe);
@@ -77,6 +79,45 @@ std::vector<TrajectoryPose> FinalPoses(const EstimatedTrajectory& trajectory) {
         trajectory.T_K_C[i];
   }
   return poses;
+}
+
+bool ConstrainTrajectory(const std::vector<PoseGraphEdge>& extra, EstimatedTrajectory* trajectory,
+                         PoseGraphReport* report, std::string* why) {
+  PoseGraph graph;
+  for (std::size_t k = 0; k < trajectory->keyframe_poses.size(); ++k) {
+    graph.AddNode(static_cast<int>(k), trajectory->keyframe_poses[k]);
+  }
+  for (const PoseGraphEdge& edge : trajectory->graph_edges) {
+    if (!graph.AddEdge(edge, why)) return false;
+  }
+  for (const PoseGraphEdge& edge : extra) {
+    if (!graph.AddEdge(edge, why)) return false;
+  }
+  if (!graph.Optimize(report, why)) return false;
+  for (const auto& [k, pose] : graph.poses()) {
+    trajectory->keyframe_poses[static_cast<std::size_t>(k)] = pose;
+  }
+  std::vector<bool> rejected(graph.edges().size(), false);
+  for (int e : report->rejected_loops) rejected[static_cast<std::size_t>(e)] = true;
+  trajectory->graph_edges.clear();
+  for (std::size_t e = 0; e < graph.edges().size(); ++e) {
+    if (!rejected[e]) trajectory->graph_edges.push_back(graph.edges()[e]);
+  }
+  return true;
+}
+
+std::optional<KeyframeAnchor> AnchorOfFrame(const EstimatedTrajectory& trajectory,
+                                            std::int64_t frame_index) {
+  const auto it = std::lower_bound(trajectory.frame_index.begin(), trajectory.frame_index.end(),
+                                   frame_index);
+  if (it == trajectory.frame_index.end() || *it != frame_index) return std::nullopt;
+  const auto i = static_cast<std::size_t>(it - trajectory.frame_index.begin());
+  const int node = trajectory.reference_keyframe[i];
+  if (node < 0 || static_cast<std::size_t>(node) >= trajectory.keyframe_poses.size()) {
+    return std::nullopt;
+  }
+  return KeyframeAnchor{node, trajectory.keyframe_poses[static_cast<std::size_t>(node)],
+                        trajectory.T_K_C[i]};
 }
 
 std::unique_ptr<FrameStream> WithEstimatedPoses(std::unique_ptr<FrameStream> inner,

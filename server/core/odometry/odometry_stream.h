@@ -4,10 +4,14 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "dataset/frame_stream.h"
 #include "odometry/rgbd_odometry.h"
+#include "posegraph/object_constraints.h"
+#include "posegraph/pose_graph.h"
 #include "types/trajectory_pose.h"
 
 namespace objmap {
@@ -29,11 +33,25 @@ struct EstimatedTrajectory {
   std::vector<int> reference_keyframe;
   std::vector<Eigen::Isometry3d> T_K_C;
   std::vector<Eigen::Isometry3d> keyframe_poses;
+  /// The pose graph over the keyframes (node = index into keyframe_poses) as tracking left it.
+  std::vector<PoseGraphEdge> graph_edges;
 };
 
 /// Every tracked frame's pose after all the loop closures so far: its keyframe's latest pose
 /// times its pose relative to it (`estimated` holds the poses as they were when tracked).
 [[nodiscard]] std::vector<TrajectoryPose> FinalPoses(const EstimatedTrajectory& trajectory);
+
+/// Optimizes the trajectory's pose graph with `extra` edges between its keyframes added (object
+/// constraints, ObjectConstraints) and moves keyframe_poses; the extra edges the graph kept join
+/// graph_edges. False with the reason when the graph cannot be solved (trajectory unchanged).
+[[nodiscard]] bool ConstrainTrajectory(const std::vector<PoseGraphEdge>& extra,
+                                       EstimatedTrajectory* trajectory, PoseGraphReport* report,
+                                       std::string* why);
+
+/// The pose-graph anchor of every tracked frame: its keyframe (node), the keyframe's latest pose
+/// and the frame's offset from it; by the frame's index in its source.
+[[nodiscard]] std::optional<KeyframeAnchor> AnchorOfFrame(const EstimatedTrajectory& trajectory,
+                                                          std::int64_t frame_index);
 
 /// Frames of `inner` with T_W_C replaced by the odometry's estimate. The world frame is the first
 /// tracked frame's camera frame, or with `start_at_source_pose` the source's own world frame: the

@@ -580,4 +580,6 @@ Eigen::Isometry3d RgbdOdometry::KeyframePose(int keyframe) const {
 
 int RgbdOdometry::loops_closed() const { return impl_->loops_closed; }
 
+const std::vector<PoseGraphEdge>& RgbdOdometry::graph_edges() const { return impl_->edges; }
+
 }  // namespace objmap

@@ -7,6 +7,7 @@
 #include <memory>
 #include <string>
 
+#include "posegraph/pose_graph.h"
 #include "types/frame.h"
 
 namespace objmap {
@@ -125,6 +126,9 @@ class RgbdOdometry {
   /// The keyframe's current pose (moved by every loop closure).
   [[nodiscard]] Eigen::Isometry3d KeyframePose(int keyframe) const;
   [[nodiscard]] int loops_closed() const;
+  /// The pose graph's edges between keyframes (node = keyframe index): odometry and the loops
+  /// kept, so that a caller can add constraints of its own (ConstrainTrajectory).
+  [[nodiscard]] const std::vector<PoseGraphEdge>& graph_edges() const;
 
  private:
   struct Impl;
