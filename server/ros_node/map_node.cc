@@ -44,7 +44,11 @@ MapNode::MapNode(const ros::NodeHandle& node, const ros::NodeHandle& private_nod
   impl_->AdvertiseTopics();
   impl_->AdvertiseServices();
   if (impl_->config.estimates_poses()) {
-    impl_->odometry = std::make_unique<RgbdOdometry>(impl_->config.objmap.map_server.odometry);
+    // The node tracks every camera frame at the camera's rate: loop searches and graph solves
+    // run beside tracking instead of holding frames up.
+    OdometryConfig odometry = impl_->config.objmap.map_server.odometry;
+    odometry.background_loop_closure = true;
+    impl_->odometry = std::make_unique<RgbdOdometry>(odometry);
     impl_->tf_broadcaster = std::make_unique<tf2_ros::TransformBroadcaster>();
     impl_->ResumeTracking();
   }

@@ -131,8 +131,15 @@ TEST_F(CliScene, EstimatedPosesOnRealFramesAreScoredAgainstTheDatasets) {
   std::ofstream(Path("none.json")) << R"({"frames": {}})";
   const CommandResult run =
       RunObjmap("map " + redkitchen + " --out " + Path("est") + " --detections " +
-                Path("none.json") + " --max-frames 60 --poses estimate");
+                Path("none.json") + " --max-frames 60 --poses estimate --object-constraints on");
   ASSERT_EQ(run.exit_code, 0) << run.output;
+  // Without detections there is no object to tie keyframes with: the graph is left as it is.
+  EXPECT_NE(run.output.find("object constraints: 0 objects with distant views, 0 view pairs "
+                            "aligned, 0 constraints"),
+            std::string::npos)
+      << run.output;
+  EXPECT_NE(run.output.find("after object constraints: ATE RMSE "), std::string::npos)
+      << run.output;
   EXPECT_NE(run.output.find("poses estimated by RGB-D odometry from the input's first pose (its "
                             "other poses only score them)"),
             std::string::npos)
@@ -166,6 +173,11 @@ TEST_F(CliScene, EstimatedPosesOnRealFramesAreScoredAgainstTheDatasets) {
   EXPECT_EQ(wrong.exit_code, 2) << wrong.output;
   EXPECT_NE(wrong.output.find("--poses must be auto, input or estimate, not gps"), std::string::npos)
       << wrong.output;
+  const CommandResult wrong_constraints = RunObjmap(MapArguments("--object-constraints maybe"));
+  EXPECT_EQ(wrong_constraints.exit_code, 2) << wrong_constraints.output;
+  EXPECT_NE(wrong_constraints.output.find("--object-constraints must be on or off, not maybe"),
+            std::string::npos)
+      << wrong_constraints.output;
 }
 
 TEST_F(CliScene, EmptyOrMissingInputIsAClearError) {

@@ -2,6 +2,7 @@
 // direction constrained) seen from two known poses, and a single wall (three directions free).
 
 #include "odometry/depth_alignment.h"
+#include "posegraph/pose_graph.h"
 
 #include <gtest/gtest.h>
 
@@ -169,6 +170,14 @@ TEST(AlignDepth, ASingleWallLeavesDirectionsFreeAndSaysSo) {
   // Towards the wall is measured; sideways along it is not.
   EXPECT_NEAR(T_model_frame.translation().z(), 0.03, 0.002);
   EXPECT_LT(report.conditioning, 1e-6);
+  // As a pose-graph edge: the floor's information towards the wall, next to none along it.
+  const AlignmentInformationConfig floor;
+  const Eigen::Matrix<double, 6, 6> information = AlignmentInformation(
+      report.hessian, report.centre, report.radius_m, T_model_frame.translation(), floor);
+  const double floor_m = 1.0 / (floor.floor_sigma_m * floor.floor_sigma_m);
+  EXPECT_NEAR(information(2, 2), floor_m, 0.1 * floor_m);
+  EXPECT_LT(information(0, 0), 0.01 * floor_m);
+  EXPECT_LT(information(1, 1), 0.01 * floor_m);
 }
 
 TEST(AlignDepth, TooFewCorrespondencesLeaveThePoseAlone) {

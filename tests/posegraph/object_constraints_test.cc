@@ -176,7 +176,7 @@ TEST(ObjectConstraints, ViewsOfDifferentThingsAreRefused) {
   EXPECT_TRUE(estimate.isApprox(before));
 }
 
-MapObject ObjectOf(ObjectId id, int class_id, const std::vector<ObjectObservation>& observations,
+MapObject ObjectOf(ObjectId id, const std::vector<ObjectObservation>& observations,
                    const Eigen::Vector3f& centroid_W) {
   MapObject object;
   object.id = id;
@@ -215,10 +215,10 @@ TEST(ObjectConstraints, AnObjectMappedTwiceThroughDriftTiesTheNodesThatSawIt) {
   T_node_C.translation() = Eigen::Vector3d(0.0, 0.0, 0.05);
   const std::vector<Eigen::Vector3f> view_1 = View(box, T_W_1, &random);
   const std::vector<Eigen::Vector3f> view_2 = View(box, T_W_2, &random);
-  const MapObject first = ObjectOf(1, tv, {Observation(1, tv, view_1)}, {0.0f, 2.0f, 0.8f});
-  const MapObject second = ObjectOf(2, tv, {Observation(2, tv, view_2)}, {0.03f, 1.98f, 0.82f});
+  const MapObject first = ObjectOf(1, {Observation(1, tv, view_1)}, {0.0f, 2.0f, 0.8f});
+  const MapObject second = ObjectOf(2, {Observation(2, tv, view_2)}, {0.03f, 1.98f, 0.82f});
   // A cup far away, seen once: nothing to pair it with.
-  const MapObject lone = ObjectOf(3, cup, {Observation(1, cup, view_1)}, {2.0f, 0.0f, 0.8f});
+  const MapObject lone = ObjectOf(3, {Observation(1, cup, view_1)}, {2.0f, 0.0f, 0.8f});
   const std::vector<const MapObject*> objects = {&first, &second, &lone};
   const auto anchor_of = [&](KeyframeId id) -> std::optional<KeyframeAnchor> {
     if (id == 1) return KeyframeAnchor{10, T_W_1 * T_node_C.inverse(), T_node_C};

@@ -170,5 +170,64 @@ TEST(PoseGraph, MalformedEdgesAreRefused) {
   EXPECT_FALSE(graph.Optimize(&report, &why));
 }
 
+// The whitened point-to-plane Hessian of `points` with `normals` (sigma 1 mm), increments turning
+// about `centre`.
+Eigen::Matrix<double, 6, 6> PlaneHessian(const std::vector<Eigen::Vector3d>& points,
+                                         const std::vector<Eigen::Vector3d>& normals,
+                                         const Eigen::Vector3d& centre) {
+  Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    Eigen::Matrix<double, 6, 1> J;
+    J << normals[i], (points[i] - centre).cross(normals[i]);
+    H += J * J.transpose() / (0.001 * 0.001);
+  }
+  return H;
+}
+
+TEST(AlignmentInformation, AWallFixesItsNormalAndTiltsAndLeavesTheRestFree) {
+  // A 2 m x 2 m wall at z = 2 seen from the origin, a point every 5 cm; normals slightly noisy.
+  std::mt19937 random(3);
+  std::normal_distribution<double> tilt(0.0, 0.03);
+  std::vector<Eigen::Vector3d> points, normals;
+  for (double x = -1.0; x <= 1.0; x += 0.05) {
+    for (double y = -1.0; y <= 1.0; y += 0.05) {
+      points.emplace_back(x, y, 2.0);
+      normals.push_back(Eigen::Vector3d(tilt(random), tilt(random), -1.0).normalized());
+    }
+  }
+  const Eigen::Vector3d centre(0.0, 0.0, 2.0);
+  const Eigen::Vector3d to_origin(0.3, 0.0, 0.0);  // the other camera, 30 cm to the side
+  const AlignmentInformationConfig config;
+  const Eigen::Matrix<double, 6, 6> information =
+      AlignmentInformation(PlaneHessian(points, normals, centre), centre, 0.8, to_origin, config);
+  const double floor_m = 1.0 / (config.floor_sigma_m * config.floor_sigma_m);
+  // Along the normal: the floor; across the wall: next to nothing (the prior's 1 / m^2).
+  EXPECT_NEAR(information(2, 2), floor_m, 0.05 * floor_m);
+  EXPECT_LT(information(0, 0), 10.0);
+  EXPECT_LT(information(1, 1), 10.0);
+  // Turning about the wall's normal (z) is free; tilting it is not.
+  const double floor_rad = 1.0 / std::pow(config.floor_sigma_deg * 0.017453292519943295, 2);
+  EXPECT_LT(information(5, 5), 0.01 * floor_rad);
+  EXPECT_GT(information(3, 3), 0.5 * floor_rad);
+  EXPECT_TRUE(information.isApprox(information.transpose()));
+  const Eigen::LLT<Eigen::Matrix<double, 6, 6>> cholesky(information);
+  EXPECT_EQ(cholesky.info(), Eigen::Success);
+
+  // A corner of three walls fixes everything: the floor in every direction.
+  std::vector<Eigen::Vector3d> corner_points = points, corner_normals = normals;
+  for (double a = -1.0; a <= 1.0; a += 0.05) {
+    for (double b = 0.0; b <= 2.0; b += 0.05) {
+      corner_points.emplace_back(-1.0, a, b);
+      corner_normals.emplace_back(1.0, 0.0, 0.0);
+      corner_points.emplace_back(a, -1.0, b);
+      corner_normals.emplace_back(0.0, 1.0, 0.0);
+    }
+  }
+  const Eigen::Matrix<double, 6, 6> corner = AlignmentInformation(
+      PlaneHessian(corner_points, corner_normals, centre), centre, 1.0, to_origin, config);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(corner(i, i), floor_m, 0.1 * floor_m) << i;
+  for (int i = 3; i < 6; ++i) EXPECT_GT(corner(i, i), 0.5 * floor_rad) << i;
+}
+
 }  // namespace
 }  // namespace objmap

@@ -110,6 +110,8 @@ bool AlignDepth(const std::vector<const DepthGrid*>& model_levels,
       Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
       double squared_sum = 0.0;
       int used = 0;
+      Eigen::Vector3d point_sum = Eigen::Vector3d::Zero();
+      double point_squared_sum = 0.0;
       const Eigen::Matrix3f R = T.linear().cast<float>();
       const Eigen::Vector3f t = T.translation().cast<float>();
       for (std::size_t i = 0; i < frame.points.size(); ++i) {
@@ -138,6 +140,8 @@ bool AlignDepth(const std::vector<const DepthGrid*>& model_levels,
         H.noalias() += weight * J * J.transpose();
         g.noalias() -= weight * J * residual;
         squared_sum += residual * residual;
+        point_sum += q.cast<double>();
+        point_squared_sum += q.cast<double>().squaredNorm();
         ++used;
       }
       report->correspondences = used;
@@ -145,6 +149,13 @@ bool AlignDepth(const std::vector<const DepthGrid*>& model_levels,
       report->rmse_m = std::sqrt(squared_sum / used);
       const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eigen(H, Eigen::EigenvaluesOnly);
       report->conditioning = eigen.eigenvalues()(5) > 0.0 ? eigen.eigenvalues()(0) / eigen.eigenvalues()(5) : 0.0;
+      // About the centroid c instead of the origin: dt_origin = dt_c + c x dtheta.
+      const Eigen::Vector3d c = point_sum / used;
+      Eigen::Matrix<double, 6, 6> M = Eigen::Matrix<double, 6, 6>::Identity();
+      M.block<3, 3>(0, 3) << 0.0, -c.z(), c.y(), c.z(), 0.0, -c.x(), -c.y(), c.x(), 0.0;
+      report->hessian = M.transpose() * H * M;
+      report->centre = c;
+      report->radius_m = std::sqrt(std::max(0.0, point_squared_sum / used - c.squaredNorm()));
       const Eigen::Matrix<double, 6, 1> xi = H.ldlt().solve(g);
       if (!xi.allFinite()) return false;
       Eigen::Isometry3d step = Eigen::Isometry3d::Identity();

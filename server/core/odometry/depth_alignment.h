@@ -44,6 +44,12 @@ struct DepthAlignmentReport {
   /// The smallest eigenvalue of the last normal equations over the largest: near 0 when the
   /// geometry leaves a direction free (a single plane, a corridor).
   double conditioning = 0.0;
+  /// The last iteration's whitened Hessian (residuals over their depth noise) for increments
+  /// that turn about `centre`, the correspondences' centroid (model frame), and their RMS
+  /// distance from it: what AlignmentInformation needs for an edge's information.
+  Eigen::Matrix<double, 6, 6> hessian = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  double radius_m = 0.0;
 };
 
 /// Refines T_model_frame (maps frame points into the model's camera) by point-to-plane ICP of

@@ -6,6 +6,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <thread>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/core/eigen.hpp>
@@ -32,9 +37,10 @@ struct FrameFeatures {
   DepthGrid fine_depth;
 };
 
-// A frame that later frames are tracked against: only its keypoints with a 3D point.
+// A frame that later frames are tracked against: only its keypoints with a 3D point. Immutable
+// once made, so that the loop-closure worker reads it while tracking goes on; its pose lives
+// apart (Impl::poses), since loop closures move it.
 struct Keyframe {
-  Eigen::Isometry3d T_W_K = Eigen::Isometry3d::Identity();
   std::vector<cv::Point3f> points_K;
   cv::Mat descriptors;
   cv::Mat strongest_descriptors;  // its appearance: the strongest keypoints with depth
@@ -45,12 +51,15 @@ struct Keyframe {
 // What PnP found for a frame against one keyframe.
 struct PoseFit {
   bool ok = false;
-  Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_K_C = Eigen::Isometry3d::Identity();
   int matches = 0;
   int inliers = 0;
   double rmse_px = 0.0;
   bool depth_refined = false;
   double depth_rmse_m = 0.0;
+  // Of T_K_C as an edge (PoseGraphEdge convention): from the dense step's Hessian when it ran,
+  // the configured sigmas otherwise.
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Identity();
   std::string why;
 };
 
@@ -105,6 +114,11 @@ bool OdometryConfig::IsValid(std::string* why) const {
         "min_inliers and relocalisation_keyframes >= 0";
     return false;
   }
+  if (!(edge_sigma_m > 0.0) || !(edge_sigma_deg > 0.0) || !(edge_feature_sigma_m > 0.0) ||
+      !(edge_feature_sigma_deg > 0.0)) {
+    *why = "odometry: edge_sigma_m, edge_sigma_deg and the edge_feature sigmas must be positive";
+    return false;
+  }
   if (loop_appearance_candidates < 0 || appearance_descriptors < 2) {
     *why = "odometry: loop_appearance_candidates must be >= 0 and appearance_descriptors >= 2";
     return false;
@@ -136,23 +150,60 @@ const char* TrackingStatusName(TrackingStatus status) {
   return "?";
 }
 
+// A loop search for one new keyframe: its features and everything it reads, copied when it
+// starts (keyframes are shared, being immutable), so that tracking goes on meanwhile.
+struct LoopJob {
+  int newest = -1;
+  std::shared_ptr<const FrameFeatures> features;
+  CameraIntrinsics intrinsics;
+  std::vector<std::shared_ptr<const Keyframe>> keyframes;  // 0..newest
+  std::vector<Eigen::Isometry3d> poses;                   // 0..newest
+  std::vector<PoseGraphEdge> edges;
+};
+
+// What a loop search found: with loops, every keyframe's pose up to the job's newest after the
+// solve, and the graph's edges (the job's, the loops added, wrong loops dropped).
+struct LoopClosure {
+  int newest = -1;
+  int loops = 0;
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<PoseGraphEdge> edges;
+  std::size_t job_edges = 0;  // edges the job started from: later ones were added meanwhile
+  double ms = 0.0;
+};
+
 struct RgbdOdometry::Impl {
-  explicit Impl(const OdometryConfig& c)
-      : config(c),
-        orb(cv::ORB::create(c.features)),
-        matcher(cv::NORM_HAMMING) {}
+  explicit Impl(const OdometryConfig& c) : config(c), orb(cv::ORB::create(c.features)) {}
+  ~Impl() { StopWorker(); }
 
   OdometryConfig config;
   cv::Ptr<cv::ORB> orb;
-  cv::BFMatcher matcher;
-  std::vector<Keyframe> keyframes;
+  // Written by the tracking thread only, under `mutex` (the worker copies them under it).
+  std::vector<std::shared_ptr<const Keyframe>> keyframes;
+  std::vector<Eigen::Isometry3d> poses;
+  // Pose graph over the keyframes: an odometry edge from each keyframe to the one it was
+  // tracked from, loop edges to older keyframes that see the same place.
+  std::vector<PoseGraphEdge> edges;
+  int loops_closed = 0;
   int current_keyframe = -1;
   bool has_last = false;
   Eigen::Isometry3d last_T_W_C = Eigen::Isometry3d::Identity();
 
+  // Background loop closure (OdometryConfig::background_loop_closure): the worker takes one
+  // job at a time, and waits until its result is applied before it starts the next, so that
+  // each search starts from every loop found before.
+  std::mutex mutex;
+  std::condition_variable wake;     // worker: a job, or stop
+  std::condition_variable settled;  // FinishLoopClosure: the worker is idle or has a result
+  std::deque<LoopJob> jobs;
+  std::vector<LoopClosure> results;
+  bool busy = false;
+  bool stop = false;
+  std::thread worker;
+
   bool Extract(const RgbdFrame& frame, FrameFeatures* features, std::string* why);
   PoseFit Fit(const FrameFeatures& features, const Keyframe& keyframe,
-              const CameraIntrinsics& K) ;
+              const CameraIntrinsics& K) const;
   void AddKeyframe(const FrameFeatures& features, const Eigen::Isometry3d& T_W_C);
   // The first keyframe, at T_W_C: tracking starts from it. False when too few keypoints have
   // depth.
@@ -160,19 +211,25 @@ struct RgbdOdometry::Impl {
   // Dense step after PnP: moves T_K_C when the depth alignment succeeds within the limits.
   void RefineByDepth(const FrameFeatures& features, const Keyframe& keyframe,
                      Eigen::Isometry3d* T_K_C, PoseFit* fit) const;
+  void AddOdometryEdge(int from, int to, const Eigen::Matrix<double, 6, 6>& information);
 
-  // Pose graph over the keyframes: an odometry edge from each keyframe to the one it was
-  // tracked from, loop edges to older keyframes that see the same place.
-  std::vector<PoseGraphEdge> edges;
-  int loops_closed = 0;
-  void AddOdometryEdge(int from, int to);
-  // Older keyframes (at least loop_min_keyframe_gap before `newest`, not in `already`) that look
-  // most like the frame, best first, up to loop_appearance_candidates.
-  std::vector<int> AppearanceCandidates(int newest, const std::vector<int>& already);
-  // Tries the older keyframes near the newest one; for each that tracks it (PnP, enough
-  // inliers), a loop edge; then optimizes the graph and moves every keyframe. Returns the loops
-  // kept.
-  int CloseLoops(const FrameFeatures& features, const CameraIntrinsics& K);
+  // The job for the newest keyframe, from the current state (caller holds `mutex` or is the
+  // only thread).
+  LoopJob MakeLoopJob(std::shared_ptr<const FrameFeatures> features,
+                      const CameraIntrinsics& K) const;
+  // Older keyframes (at least loop_min_keyframe_gap before the newest, not in `already`) that
+  // look most like it, best first, up to loop_appearance_candidates.
+  std::vector<int> AppearanceCandidates(const LoopJob& job, const std::vector<int>& already) const;
+  // Tries the older keyframes near the newest one and those that look like it; for each that
+  // tracks it (PnP, enough inliers), a loop edge; then optimizes the graph. Reads only the job.
+  LoopClosure CloseLoops(const LoopJob& job) const;
+  // Moves the keyframes as `closure` says (those made since its job by the same correction as
+  // its newest) and the last pose with them. Returns the loops kept.
+  int Apply(LoopClosure closure);
+  // Applies the worker's finished results (tracking thread); loops kept and their search time.
+  int ApplyFinished(double* ms);
+  void WorkerLoop();
+  void StopWorker();
 };
 
 Eigen::Matrix<double, 6, 6> EdgeInformation(double sigma_m, double sigma_rad) {
@@ -182,25 +239,39 @@ Eigen::Matrix<double, 6, 6> EdgeInformation(double sigma_m, double sigma_rad) {
   return information;
 }
 
-void RgbdOdometry::Impl::AddOdometryEdge(int from, int to) {
+void RgbdOdometry::Impl::AddOdometryEdge(int from, int to,
+                                         const Eigen::Matrix<double, 6, 6>& information) {
   PoseGraphEdge edge;
   edge.from = from;
   edge.to = to;
-  edge.T_from_to = keyframes[static_cast<std::size_t>(from)].T_W_K.inverse() *
-                   keyframes[static_cast<std::size_t>(to)].T_W_K;
-  edge.information = EdgeInformation(config.edge_sigma_m, config.edge_sigma_deg / kDegPerRad);
+  edge.T_from_to = poses[static_cast<std::size_t>(from)].inverse() * poses[static_cast<std::size_t>(to)];
+  edge.information = information;
+  const std::lock_guard<std::mutex> lock(mutex);
   edges.push_back(edge);
 }
 
-std::vector<int> RgbdOdometry::Impl::AppearanceCandidates(int newest,
-                                                          const std::vector<int>& already) {
+LoopJob RgbdOdometry::Impl::MakeLoopJob(std::shared_ptr<const FrameFeatures> features,
+                                        const CameraIntrinsics& K) const {
+  LoopJob job;
+  job.newest = static_cast<int>(keyframes.size()) - 1;
+  job.features = std::move(features);
+  job.intrinsics = K;
+  job.keyframes = keyframes;
+  job.poses = poses;
+  job.edges = edges;
+  return job;
+}
+
+std::vector<int> RgbdOdometry::Impl::AppearanceCandidates(const LoopJob& job,
+                                                          const std::vector<int>& already) const {
   if (config.loop_appearance_candidates <= 0) return {};
-  const cv::Mat& mine = keyframes[static_cast<std::size_t>(newest)].strongest_descriptors;
+  const cv::Mat& mine = job.keyframes[static_cast<std::size_t>(job.newest)]->strongest_descriptors;
   if (mine.rows < 2) return {};
+  const cv::BFMatcher matcher(cv::NORM_HAMMING);
   std::vector<std::pair<int, int>> scored;  // (matches, keyframe)
-  for (int k = 0; k + config.loop_min_keyframe_gap <= newest; ++k) {
+  for (int k = 0; k + config.loop_min_keyframe_gap <= job.newest; ++k) {
     if (std::find(already.begin(), already.end(), k) != already.end()) continue;
-    const cv::Mat& theirs = keyframes[static_cast<std::size_t>(k)].strongest_descriptors;
+    const cv::Mat& theirs = job.keyframes[static_cast<std::size_t>(k)]->strongest_descriptors;
     if (theirs.rows < 2) continue;
     std::vector<std::vector<cv::DMatch>> knn;
     matcher.knnMatch(mine, theirs, knn, 2);
@@ -219,13 +290,21 @@ std::vector<int> RgbdOdometry::Impl::AppearanceCandidates(int newest,
   return best;
 }
 
-int RgbdOdometry::Impl::CloseLoops(const FrameFeatures& features, const CameraIntrinsics& K) {
-  if (config.loop_candidates <= 0) return 0;
-  const int newest = static_cast<int>(keyframes.size()) - 1;
-  const Eigen::Isometry3d T_W_new = keyframes.back().T_W_K;
+LoopClosure RgbdOdometry::Impl::CloseLoops(const LoopJob& job) const {
+  const auto start = Clock::now();
+  LoopClosure closure;
+  closure.newest = job.newest;
+  closure.job_edges = job.edges.size();
+  auto finish = [&]() -> LoopClosure {
+    closure.ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    return closure;
+  };
+  if (config.loop_candidates <= 0) return finish();
+  const int newest = job.newest;
+  const Eigen::Isometry3d& T_W_new = job.poses[static_cast<std::size_t>(newest)];
   std::vector<std::pair<double, int>> near;
   for (int k = 0; k + config.loop_min_keyframe_gap <= newest; ++k) {
-    const Eigen::Isometry3d offset = keyframes[static_cast<std::size_t>(k)].T_W_K.inverse() * T_W_new;
+    const Eigen::Isometry3d offset = job.poses[static_cast<std::size_t>(k)].inverse() * T_W_new;
     if (offset.translation().norm() <= config.loop_search_radius_m &&
         AngleDeg(offset.linear()) <= config.loop_search_angle_deg) {
       near.emplace_back(offset.translation().norm(), k);
@@ -236,44 +315,112 @@ int RgbdOdometry::Impl::CloseLoops(const FrameFeatures& features, const CameraIn
   for (std::size_t c = 0; c < near.size() && static_cast<int>(c) < config.loop_candidates; ++c) {
     candidates.push_back(near[c].second);
   }
-  for (int k : AppearanceCandidates(newest, candidates)) candidates.push_back(k);
+  for (int k : AppearanceCandidates(job, candidates)) candidates.push_back(k);
+  std::vector<PoseGraphEdge> edges = job.edges;
   int added = 0;
   for (const int k : candidates) {
-    const Keyframe& old = keyframes[static_cast<std::size_t>(k)];
-    const PoseFit fit = Fit(features, old, K);
+    const PoseFit fit = Fit(*job.features, *job.keyframes[static_cast<std::size_t>(k)],
+                            job.intrinsics);
     if (!fit.ok || fit.inliers < config.loop_min_inliers) continue;
     PoseGraphEdge loop;
     loop.from = k;
     loop.to = newest;
-    loop.T_from_to = old.T_W_K.inverse() * fit.T_W_C;
-    loop.information = EdgeInformation(config.edge_sigma_m, config.edge_sigma_deg / kDegPerRad);
+    loop.T_from_to = fit.T_K_C;
+    loop.information = fit.information;
     loop.loop = true;
     edges.push_back(loop);
     ++added;
   }
-  if (added == 0) return 0;
+  if (added == 0) return finish();
   PoseGraph graph;
-  for (int k = 0; k <= newest; ++k) graph.AddNode(k, keyframes[static_cast<std::size_t>(k)].T_W_K);
+  for (int k = 0; k <= newest; ++k) graph.AddNode(k, job.poses[static_cast<std::size_t>(k)]);
   std::string why;
   for (const PoseGraphEdge& edge : edges) {
-    if (!graph.AddEdge(edge, &why)) return 0;
+    if (!graph.AddEdge(edge, &why)) return finish();
   }
   PoseGraphReport report;
-  if (!graph.Optimize(&report, &why)) return 0;
+  if (!graph.Optimize(&report, &why)) return finish();
   // Wrong loops stay out of later solves.
   std::vector<bool> dropped(edges.size(), false);
   for (int e : report.rejected_loops) dropped[static_cast<std::size_t>(e)] = true;
-  std::vector<PoseGraphEdge> kept;
+  int kept_loops = added;
   for (std::size_t e = 0; e < edges.size(); ++e) {
-    if (!dropped[e]) kept.push_back(edges[e]);
+    if (!dropped[e]) {
+      closure.edges.push_back(edges[e]);
+    } else if (edges[e].to == newest && e >= job.edges.size()) {
+      --kept_loops;
+    }
   }
-  const int kept_loops = added - static_cast<int>(std::count_if(
-                                     report.rejected_loops.begin(), report.rejected_loops.end(),
-                                     [&](int e) { return edges[static_cast<std::size_t>(e)].to == newest; }));
-  edges = std::move(kept);
-  for (const auto& [k, pose] : graph.poses()) keyframes[static_cast<std::size_t>(k)].T_W_K = pose;
-  loops_closed += kept_loops;
-  return kept_loops;
+  closure.loops = kept_loops;
+  closure.poses.resize(static_cast<std::size_t>(newest) + 1);
+  for (const auto& [k, pose] : graph.poses()) closure.poses[static_cast<std::size_t>(k)] = pose;
+  return finish();
+}
+
+int RgbdOdometry::Impl::Apply(LoopClosure closure) {
+  if (closure.poses.empty()) return 0;
+  const std::lock_guard<std::mutex> lock(mutex);
+  const auto newest = static_cast<std::size_t>(closure.newest);
+  const Eigen::Isometry3d correction = closure.poses[newest] * poses[newest].inverse();
+  for (std::size_t k = 0; k < poses.size(); ++k) {
+    poses[k] = k <= newest ? closure.poses[k] : correction * poses[k];
+  }
+  // Edges added since the job (odometry edges of newer keyframes) follow the solved ones.
+  closure.edges.insert(closure.edges.end(),
+                       edges.begin() + static_cast<std::ptrdiff_t>(closure.job_edges), edges.end());
+  edges = std::move(closure.edges);
+  if (has_last) last_T_W_C = correction * last_T_W_C;
+  loops_closed += closure.loops;
+  return closure.loops;
+}
+
+int RgbdOdometry::Impl::ApplyFinished(double* ms) {
+  std::vector<LoopClosure> finished;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    finished.swap(results);
+  }
+  int loops = 0;
+  for (LoopClosure& closure : finished) {
+    *ms += closure.ms;
+    loops += Apply(std::move(closure));
+  }
+  if (!finished.empty()) wake.notify_all();  // the worker waits for its result to be applied
+  return loops;
+}
+
+void RgbdOdometry::Impl::WorkerLoop() {
+  for (;;) {
+    LoopJob job;
+    {
+      std::unique_lock<std::mutex> lock(mutex);
+      wake.wait(lock, [&] { return stop || (!jobs.empty() && results.empty()); });
+      if (stop) return;
+      job = std::move(jobs.front());
+      jobs.pop_front();
+      // The job was queued before the loops applied since: it starts from the current state.
+      job.poses.assign(poses.begin(), poses.begin() + job.newest + 1);
+      job.edges = edges;
+      busy = true;
+    }
+    LoopClosure closure = CloseLoops(job);
+    {
+      const std::lock_guard<std::mutex> lock(mutex);
+      if (!closure.poses.empty()) results.push_back(std::move(closure));
+      busy = false;
+    }
+    settled.notify_all();
+  }
+}
+
+void RgbdOdometry::Impl::StopWorker() {
+  if (!worker.joinable()) return;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    stop = true;
+  }
+  wake.notify_all();
+  worker.join();
 }
 
 bool RgbdOdometry::Impl::Extract(const RgbdFrame& frame, FrameFeatures* features,
@@ -317,8 +464,8 @@ bool RgbdOdometry::Impl::Extract(const RgbdFrame& frame, FrameFeatures* features
 
 void RgbdOdometry::Impl::AddKeyframe(const FrameFeatures& features,
                                      const Eigen::Isometry3d& T_W_C) {
-  Keyframe keyframe;
-  keyframe.T_W_K = T_W_C;
+  auto made = std::make_shared<Keyframe>();
+  Keyframe& keyframe = *made;
   keyframe.strongest_descriptors = StrongestDescriptors(features, config.appearance_descriptors);
   keyframe.coarse_depth = features.coarse_depth;
   keyframe.fine_depth = features.fine_depth;
@@ -327,7 +474,11 @@ void RgbdOdometry::Impl::AddKeyframe(const FrameFeatures& features,
     keyframe.points_K.push_back(features.points_C[i]);
     keyframe.descriptors.push_back(features.descriptors.row(static_cast<int>(i)));
   }
-  keyframes.push_back(std::move(keyframe));
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    keyframes.push_back(std::move(made));
+    poses.push_back(T_W_C);
+  }
   current_keyframe = static_cast<int>(keyframes.size()) - 1;
 }
 
@@ -371,16 +522,29 @@ void RgbdOdometry::Impl::RefineByDepth(const FrameFeatures& features, const Keyf
   *T_K_C = refined;
   fit->depth_refined = true;
   fit->depth_rmse_m = report.rmse_m;
+  if (config.edge_information_from_alignment) {
+    AlignmentInformationConfig floor;
+    floor.floor_sigma_m = config.edge_sigma_m;
+    floor.floor_sigma_deg = config.edge_sigma_deg;
+    // The features fix what the depth leaves free (a wall's plane): their own information is
+    // added to the depth's.
+    fit->information = AlignmentInformation(report.hessian, report.centre, report.radius_m,
+                                            refined.translation(), floor) +
+                       EdgeInformation(config.edge_feature_sigma_m,
+                                       config.edge_feature_sigma_deg / kDegPerRad);
+  }
 }
 
 PoseFit RgbdOdometry::Impl::Fit(const FrameFeatures& features, const Keyframe& keyframe,
-                                const CameraIntrinsics& K) {
+                                const CameraIntrinsics& K) const {
   PoseFit fit;
+  fit.information = EdgeInformation(config.edge_sigma_m, config.edge_sigma_deg / kDegPerRad);
   if (features.descriptors.empty() || keyframe.descriptors.rows < 2) {
     fit.why = "no features to match";
     return fit;
   }
   std::vector<std::vector<cv::DMatch>> knn;
+  const cv::BFMatcher matcher(cv::NORM_HAMMING);
   matcher.knnMatch(features.descriptors, keyframe.descriptors, knn, 2);
   std::vector<cv::Point3f> object_points;
   std::vector<cv::Point2f> image_points;
@@ -434,7 +598,7 @@ PoseFit RgbdOdometry::Impl::Fit(const FrameFeatures& features, const Keyframe& k
   // PnP maps keyframe points into this camera: T_C_K.
   Eigen::Isometry3d T_K_C = FromRvecTvec(rvec, tvec).inverse();
   if (config.depth_refinement) RefineByDepth(features, keyframe, &T_K_C, &fit);
-  fit.T_W_C = keyframe.T_W_K * T_K_C;
+  fit.T_K_C = T_K_C;
   fit.ok = true;
   return fit;
 }
@@ -466,24 +630,30 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
   };
   Impl& impl = *impl_;
   const OdometryConfig& config = impl.config;
-  FrameFeatures features;
-  if (!impl.Extract(frame, &features, &report.why)) return finish();
-  report.keypoints = static_cast<int>(features.keypoints.size());
+  // Loops the worker closed since the last frame move the keyframes before this frame is
+  // tracked against them.
+  report.loops_closed = impl.ApplyFinished(&report.loop_ms);
+  auto features = std::make_shared<FrameFeatures>();
+  if (!impl.Extract(frame, features.get(), &report.why)) return finish();
+  report.keypoints = static_cast<int>(features->keypoints.size());
   const int with_depth = static_cast<int>(
-      std::count(features.valid.begin(), features.valid.end(), std::uint8_t{1}));
+      std::count(features->valid.begin(), features->valid.end(), std::uint8_t{1}));
 
   if (impl.keyframes.empty()) {
-    if (!impl.Start(features, Eigen::Isometry3d::Identity(), &report.why)) return finish();
+    if (!impl.Start(*features, Eigen::Isometry3d::Identity(), &report.why)) return finish();
     report.status = TrackingStatus::kInitialized;
     report.new_keyframe = true;
     report.reference_keyframe = impl.current_keyframe;
     return finish();
   }
+  auto pose_of = [&](int k) -> const Eigen::Isometry3d& {
+    return impl.poses[static_cast<std::size_t>(k)];
+  };
 
   // A pose that moved implausibly far from the last one is a wrong PnP solution.
-  auto plausible = [&](const PoseFit& fit, std::string* why) {
+  auto plausible = [&](const Eigen::Isometry3d& T_W_C, std::string* why) {
     if (!impl.has_last) return true;
-    const Eigen::Isometry3d step = impl.last_T_W_C.inverse() * fit.T_W_C;
+    const Eigen::Isometry3d step = impl.last_T_W_C.inverse() * T_W_C;
     if (step.translation().norm() > config.max_step_m || AngleDeg(step.linear()) > config.max_step_deg) {
       *why = "implausible motion since the last frame";
       return false;
@@ -491,10 +661,10 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
     return true;
   };
 
-  PoseFit fit = impl.Fit(features, impl.keyframes[static_cast<std::size_t>(impl.current_keyframe)],
+  PoseFit fit = impl.Fit(*features, *impl.keyframes[static_cast<std::size_t>(impl.current_keyframe)],
                          frame.intrinsics);
   std::string implausible;
-  bool accepted = fit.ok && plausible(fit, &implausible);
+  bool accepted = fit.ok && plausible(pose_of(impl.current_keyframe) * fit.T_K_C, &implausible);
   report.reference_keyframe = impl.current_keyframe;
   report.status = TrackingStatus::kTracked;
   if (!accepted) {
@@ -504,12 +674,8 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
       if (k != impl.current_keyframe) order.push_back(k);
     }
     std::sort(order.begin(), order.end(), [&](int a, int b) {
-      return (impl.keyframes[static_cast<std::size_t>(a)].T_W_K.translation() -
-              impl.last_T_W_C.translation())
-                 .norm() <
-             (impl.keyframes[static_cast<std::size_t>(b)].T_W_K.translation() -
-              impl.last_T_W_C.translation())
-                 .norm();
+      return (pose_of(a).translation() - impl.last_T_W_C.translation()).norm() <
+             (pose_of(b).translation() - impl.last_T_W_C.translation()).norm();
     });
     if (static_cast<int>(order.size()) > config.relocalisation_keyframes) {
       order.resize(static_cast<std::size_t>(config.relocalisation_keyframes));
@@ -517,7 +683,7 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
     const std::string first_failure = fit.ok ? implausible : fit.why;
     for (int k : order) {
       PoseFit candidate =
-          impl.Fit(features, impl.keyframes[static_cast<std::size_t>(k)], frame.intrinsics);
+          impl.Fit(*features, *impl.keyframes[static_cast<std::size_t>(k)], frame.intrinsics);
       // After a loss the last pose may be old: only the fit itself is checked.
       if (candidate.ok) {
         fit = candidate;
@@ -537,45 +703,68 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
       return finish();
     }
   }
-  report.T_W_C = fit.T_W_C;
+  const Eigen::Isometry3d T_W_C = pose_of(report.reference_keyframe) * fit.T_K_C;
+  report.T_W_C = T_W_C;
   report.matches = fit.matches;
   report.inliers = fit.inliers;
   report.reprojection_rmse_px = fit.rmse_px;
   report.depth_refined = fit.depth_refined;
   report.depth_rmse_m = fit.depth_rmse_m;
   impl.has_last = true;
-  impl.last_T_W_C = fit.T_W_C;
+  impl.last_T_W_C = T_W_C;
 
-  auto needs_keyframe = [&](const Keyframe& keyframe, const Eigen::Isometry3d& T_W_C,
-                            int inliers) {
-    const Eigen::Isometry3d from_keyframe = keyframe.T_W_K.inverse() * T_W_C;
-    return from_keyframe.translation().norm() > config.keyframe_distance_m ||
-           AngleDeg(from_keyframe.linear()) > config.keyframe_angle_deg ||
-           inliers < config.keyframe_min_inliers;
-  };
-  if (!needs_keyframe(impl.keyframes[static_cast<std::size_t>(impl.current_keyframe)], fit.T_W_C,
-                      fit.inliers)) {
+  const bool needs_keyframe = fit.T_K_C.translation().norm() > config.keyframe_distance_m ||
+                              AngleDeg(fit.T_K_C.linear()) > config.keyframe_angle_deg ||
+                              fit.inliers < config.keyframe_min_inliers;
+  if (!needs_keyframe || with_depth < config.min_inliers) return finish();
+  const int reference_keyframe = impl.current_keyframe;
+  impl.AddKeyframe(*features, T_W_C);
+  report.new_keyframe = true;
+  report.reference_keyframe = impl.current_keyframe;
+  impl.AddOdometryEdge(reference_keyframe, impl.current_keyframe, fit.information);
+  if (config.loop_candidates <= 0) return finish();
+  if (config.background_loop_closure) {
+    {
+      const std::lock_guard<std::mutex> lock(impl.mutex);
+      LoopJob job;
+      job.newest = impl.current_keyframe;
+      job.features = std::move(features);
+      job.intrinsics = frame.intrinsics;
+      job.keyframes = impl.keyframes;  // poses and edges: taken when the job starts
+      impl.jobs.push_back(std::move(job));
+      if (!impl.worker.joinable()) {
+        impl.worker = std::thread([&impl] { impl.WorkerLoop(); });
+      }
+    }
+    impl.wake.notify_all();
     return finish();
   }
-  if (with_depth >= config.min_inliers) {
-    const int reference_keyframe = impl.current_keyframe;
-    impl.AddKeyframe(features, fit.T_W_C);
-    report.new_keyframe = true;
-    report.reference_keyframe = impl.current_keyframe;
-    impl.AddOdometryEdge(reference_keyframe, impl.current_keyframe);
-    const auto loop_start = Clock::now();
-    report.loops_closed = impl.CloseLoops(features, frame.intrinsics);
-    report.loop_ms = std::chrono::duration<double, std::milli>(Clock::now() - loop_start).count();
-    if (report.loops_closed > 0) {
-      report.T_W_C = impl.keyframes.back().T_W_K;
-      impl.last_T_W_C = report.T_W_C;
-    }
-  }
+  LoopClosure closure = impl.CloseLoops(impl.MakeLoopJob(std::move(features), frame.intrinsics));
+  report.loop_ms += closure.ms;
+  const int loops = impl.Apply(std::move(closure));
+  report.loops_closed += loops;
+  if (loops > 0) report.T_W_C = impl.last_T_W_C;
   return finish();
 }
 
+int RgbdOdometry::FinishLoopClosure() {
+  Impl& impl = *impl_;
+  int loops = 0;
+  double ms = 0.0;
+  for (;;) {
+    loops += impl.ApplyFinished(&ms);
+    std::unique_lock<std::mutex> lock(impl.mutex);
+    impl.settled.wait(lock, [&] {
+      return !impl.results.empty() || (impl.jobs.empty() && !impl.busy) || !impl.worker.joinable();
+    });
+    if (impl.results.empty() && ((impl.jobs.empty() && !impl.busy) || !impl.worker.joinable())) {
+      return loops;
+    }
+  }
+}
+
 Eigen::Isometry3d RgbdOdometry::KeyframePose(int keyframe) const {
-  return impl_->keyframes.at(static_cast<std::size_t>(keyframe)).T_W_K;
+  return impl_->poses.at(static_cast<std::size_t>(keyframe));
 }
 
 int RgbdOdometry::loops_closed() const { return impl_->loops_closed; }

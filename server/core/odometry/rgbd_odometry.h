@@ -53,9 +53,24 @@ struct OdometryConfig {
   /// robust loss). 0: candidates by pose only.
   int loop_appearance_candidates = 2;
   int appearance_descriptors = 300;
+  /// Loop search, verification and graph solve on a thread of their own: Track hands each new
+  /// keyframe over and returns, and the loops found move the keyframes at the start of a later
+  /// Track (TrackingReport::loops_closed says when). For a live camera, whose frames must not
+  /// wait on a solve. Off: each keyframe's loops are closed before its Track returns, so the
+  /// same frames always give the same trajectory (recordings, datasets, tests).
+  bool background_loop_closure = false;
   /// Standard deviations of a keyframe-to-keyframe measurement (odometry and loop edges).
   double edge_sigma_m = 0.01;
   double edge_sigma_deg = 0.5;
+  /// With depth_refinement: each edge's information from the dense step's Hessian
+  /// (AlignmentInformation; edge_sigma in the directions the depth fixes, next to nothing in
+  /// those it leaves free: a wall's plane) plus the features' own (edge_feature_sigma in every
+  /// direction: the features fix what the depth leaves free). Off: edge_sigma in every
+  /// direction. On redkitchen: 2.75 cm ATE against 2.77 (docs/benchmarks.md); the depth's
+  /// Hessian alone, without the features' share, gave 3.57 cm.
+  bool edge_information_from_alignment = true;
+  double edge_feature_sigma_m = 0.02;
+  double edge_feature_sigma_deg = 1.0;
   /// Dense refinement of every feature pose by point-to-plane ICP of the two depth images
   /// (AlignDepth), on cells of coarse then fine step pixels. Feature depths are read at edges,
   /// where depth is worst; the dense step uses every smooth surface and lowers the drift (on
@@ -97,13 +112,18 @@ struct TrackingReport {
   double depth_rmse_m = 0.0;          ///< point-to-plane residual of the dense step
   int reference_keyframe = -1;        ///< index of the keyframe tracked against
   bool new_keyframe = false;          ///< this frame became a keyframe (reference_keyframe)
-  int loops_closed = 0;               ///< loop edges added with it (every keyframe then moved)
-  double loop_ms = 0.0;  ///< of `ms`: loop-closure detection, verification and graph solve
+  /// Loop edges kept (every keyframe then moved): those closed for this frame's keyframe, or with
+  /// background_loop_closure those the worker found since the last frame.
+  int loops_closed = 0;
+  /// Loop-closure detection, verification and graph solve for those loops; part of `ms`
+  /// unless they ran in the background.
+  double loop_ms = 0.0;
   double ms = 0.0;                    ///< time spent
   std::string why;                    ///< kLost: the reason
 };
 
-/// Thread-safety: none (one camera, one thread).
+/// Thread-safety: none (one camera, one thread); with background_loop_closure a thread of its
+/// own searches loops, and every method but the constructor stays on the caller's thread.
 class RgbdOdometry {
  public:
   /// `config` must satisfy IsValid().
@@ -121,6 +141,10 @@ class RgbdOdometry {
   /// restart: the newest stored keyframe). Only before the first Track or seed; false with the
   /// reason otherwise, or when the frame has too few keypoints with depth.
   bool StartFromKnownPose(const RgbdFrame& frame, std::string* why);
+
+  /// With background_loop_closure: waits for the loop searches under way and applies what they
+  /// found (the end of a recording). Returns the loops closed by them; 0 without the option.
+  int FinishLoopClosure();
 
   [[nodiscard]] int num_keyframes() const;
   /// The keyframe's current pose (moved by every loop closure).

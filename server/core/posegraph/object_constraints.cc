@@ -288,29 +288,13 @@ bool AlignSegments(const std::vector<Eigen::Vector3f>& target,
     const NormalEquations at_optimum =
         Linearize(target, normals, tree, source, pose, centre, config.icp_last_max_distance_m,
                   config.point_sigma_m);
-    // The geometry's information about the centre, free directions removed ...
-    const ConstrainedSubspace subspace =
-        Constrained(at_optimum.H, radius_m, config.min_eigenvalue_ratio);
-    const Eigen::Matrix<double, 6, 6> scale_inverse = subspace.scale.inverse();
-    const Eigen::Matrix<double, 6, 6> about_centre =
-        scale_inverse * subspace.vectors * subspace.values.asDiagonal() *
-        subspace.vectors.transpose() * scale_inverse;
-    // ... moved to the pose graph's convention (translation of the source origin, rotation
-    // about it): dt_centre = dt - (centre - t) x dtheta, so H = A^T H_centre A.
-    Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Identity();
-    const Eigen::Vector3d arm = centre - pose.translation();
-    A.block<3, 3>(0, 3) << 0.0, arm.z(), -arm.y(), -arm.z(), 0.0, arm.x(), arm.y(), -arm.x(), 0.0;
-    Eigen::Matrix<double, 6, 6> geometric =
-        A.transpose() * about_centre * A / (config.point_sigma_m * config.point_sigma_m);
-    // Covariance of the geometry plus the floor; a weak prior (1 m, 1 rad) makes the free
-    // directions invertible, with next to no information left in them.
-    geometric.diagonal().array() += 1.0;
-    Eigen::Matrix<double, 6, 6> covariance = geometric.inverse();
-    const double floor_rad = config.floor_sigma_deg * kRadPerDeg;
-    covariance.diagonal().head<3>().array() += config.floor_sigma_m * config.floor_sigma_m;
-    covariance.diagonal().tail<3>().array() += floor_rad * floor_rad;
-    const Eigen::Matrix<double, 6, 6> info = covariance.inverse();
-    *information = 0.5 * (info + info.transpose());
+    AlignmentInformationConfig floor;
+    floor.floor_sigma_m = config.floor_sigma_m;
+    floor.floor_sigma_deg = config.floor_sigma_deg;
+    floor.min_eigenvalue_ratio = config.min_eigenvalue_ratio;
+    *information = AlignmentInformation(
+        at_optimum.H / (config.point_sigma_m * config.point_sigma_m), centre, radius_m,
+        pose.translation(), floor);
   }
   *T_target_source = pose;
   return true;

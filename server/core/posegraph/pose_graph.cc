@@ -2,6 +2,8 @@
 
 #include <ceres/ceres.h>
 
+#include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -48,6 +50,49 @@ class RelativePoseError {
 };
 
 }  // namespace
+
+namespace {
+
+// [a]x: the matrix of a x (.).
+Eigen::Matrix3d Skew(const Eigen::Vector3d& a) {
+  Eigen::Matrix3d skew;
+  skew << 0.0, -a.z(), a.y(), a.z(), 0.0, -a.x(), -a.y(), a.x(), 0.0;
+  return skew;
+}
+
+}  // namespace
+
+Eigen::Matrix<double, 6, 6> AlignmentInformation(const Eigen::Matrix<double, 6, 6>& H,
+                                                 const Eigen::Vector3d& centre, double radius_m,
+                                                 const Eigen::Vector3d& to_origin,
+                                                 const AlignmentInformationConfig& config) {
+  using Matrix6d = Eigen::Matrix<double, 6, 6>;
+  // The fixed directions: eigenvectors of H with rotations scaled to metres of point motion.
+  Matrix6d scale = Matrix6d::Identity();
+  scale.diagonal().tail<3>().setConstant(1.0 / std::max(radius_m, 1e-3));
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> eigen(scale * H * scale);
+  const double largest = eigen.eigenvalues().maxCoeff();
+  Eigen::Matrix<double, 6, 1> kept = Eigen::Matrix<double, 6, 1>::Zero();
+  for (int i = 0; i < 6; ++i) {
+    const double value = eigen.eigenvalues()(i);
+    if (largest > 0.0 && value >= config.min_eigenvalue_ratio * largest) kept(i) = value;
+  }
+  const Matrix6d unscale = scale.inverse();
+  const Matrix6d about_centre =
+      unscale * eigen.eigenvectors() * kept.asDiagonal() * eigen.eigenvectors().transpose() * unscale;
+  // The pose graph turns about to's origin: dt_centre = dt + dtheta x (centre - to_origin), so
+  // H = M^T H_centre M with M = [I, -[centre - to_origin]x; 0, I].
+  Matrix6d M = Matrix6d::Identity();
+  M.block<3, 3>(0, 3) = -Skew(centre - to_origin);
+  Matrix6d geometric = M.transpose() * about_centre * M;
+  geometric.diagonal().array() += 1.0;  // the weak prior: 1 m, 1 rad
+  Matrix6d covariance = geometric.inverse();
+  const double floor_rad = config.floor_sigma_deg * 0.017453292519943295;
+  covariance.diagonal().head<3>().array() += config.floor_sigma_m * config.floor_sigma_m;
+  covariance.diagonal().tail<3>().array() += floor_rad * floor_rad;
+  const Matrix6d information = covariance.inverse();
+  return 0.5 * (information + information.transpose());
+}
 
 bool PoseGraphConfig::IsValid(std::string* why) const {
   if (!(loop_loss_scale > 0.0) || !(loop_rejection_chi2 > 0.0) || max_iterations < 1 ||

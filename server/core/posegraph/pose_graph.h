@@ -48,6 +48,31 @@ struct PoseGraphReport {
   std::vector<int> rejected_loops;
 };
 
+/// How an alignment's Hessian becomes an edge's information (AlignmentInformation).
+struct AlignmentInformationConfig {
+  /// The least uncertainty an edge claims in any direction: the points of an alignment are not
+  /// independent (depth bias, calibration, colour not registered to depth), so the Hessian alone
+  /// overstates the accuracy.
+  double floor_sigma_m = 0.01;
+  double floor_sigma_deg = 0.5;
+  /// A direction is fixed by the alignment when its curvature (rotations as motion of the points,
+  /// at the points' radius about their centre) reaches this fraction of the best fixed one;
+  /// weaker ones are free (a single plane's in-plane motion): noise in the normals gives them a
+  /// little curvature that is not information (Zhang, Kaess and Singh, "On degeneracy of
+  /// optimization-based state estimation problems", ICRA 2016).
+  double min_eigenvalue_ratio = 0.05;
+};
+
+/// The information matrix of T_from_to (PoseGraphEdge convention) measured by an alignment of
+/// `to`'s points onto `from`'s: H is its whitened Gauss-Newton Hessian (residuals divided by
+/// their sigma) at the optimum for increments [dt; dtheta] that move a point q (in `from`'s
+/// frame) to q + dt + dtheta x (q - centre); radius_m is the spread of the points about
+/// `centre`; to_origin is T_from_to's translation. Free directions keep next to no information
+/// (a prior of 1 m and 1 rad), fixed ones at most the floor's.
+[[nodiscard]] Eigen::Matrix<double, 6, 6> AlignmentInformation(
+    const Eigen::Matrix<double, 6, 6>& H, const Eigen::Vector3d& centre, double radius_m,
+    const Eigen::Vector3d& to_origin, const AlignmentInformationConfig& config);
+
 /// Thread-safety: none.
 class PoseGraph {
  public:
