@@ -1,5 +1,6 @@
 #include "odometry/rgbd_odometry.h"
 
+#include "odometry/appearance_index.h"
 #include "odometry/depth_alignment.h"
 #include "posegraph/pose_graph.h"
 
@@ -57,9 +58,9 @@ struct PoseFit {
   double rmse_px = 0.0;
   bool depth_refined = false;
   double depth_rmse_m = 0.0;
-  // Of T_K_C as an edge (PoseGraphEdge convention): from the dense step's Hessian when it ran,
-  // the configured sigmas otherwise.
-  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Identity();
+  // The dense step's last Hessian, for the information of T_K_C as an edge (made only for the
+  // fits that become edges: EdgeInformationOf).
+  DepthAlignmentReport alignment;
   std::string why;
 };
 
@@ -119,8 +120,10 @@ bool OdometryConfig::IsValid(std::string* why) const {
     *why = "odometry: edge_sigma_m, edge_sigma_deg and the edge_feature sigmas must be positive";
     return false;
   }
-  if (loop_appearance_candidates < 0 || appearance_descriptors < 2) {
-    *why = "odometry: loop_appearance_candidates must be >= 0 and appearance_descriptors >= 2";
+  if (loop_appearance_candidates < 0 || appearance_descriptors < 2 || appearance_shortlist < 0) {
+    *why =
+        "odometry: loop_appearance_candidates and appearance_shortlist must be >= 0 and "
+        "appearance_descriptors >= 2";
     return false;
   }
   if (depth_refinement &&
@@ -212,6 +215,8 @@ struct RgbdOdometry::Impl {
   void RefineByDepth(const FrameFeatures& features, const Keyframe& keyframe,
                      Eigen::Isometry3d* T_K_C, PoseFit* fit) const;
   void AddOdometryEdge(int from, int to, const Eigen::Matrix<double, 6, 6>& information);
+  // The information of a fit's T_K_C as an edge (OdometryConfig::edge_information_from_alignment).
+  Eigen::Matrix<double, 6, 6> EdgeInformationOf(const PoseFit& fit) const;
 
   // The job for the newest keyframe, from the current state (caller holds `mutex` or is the
   // only thread).
@@ -219,10 +224,14 @@ struct RgbdOdometry::Impl {
                       const CameraIntrinsics& K) const;
   // Older keyframes (at least loop_min_keyframe_gap before the newest, not in `already`) that
   // look most like it, best first, up to loop_appearance_candidates.
-  std::vector<int> AppearanceCandidates(const LoopJob& job, const std::vector<int>& already) const;
+  std::vector<int> AppearanceCandidates(const LoopJob& job, const std::vector<int>& already);
   // Tries the older keyframes near the newest one and those that look like it; for each that
-  // tracks it (PnP, enough inliers), a loop edge; then optimizes the graph. Reads only the job.
-  LoopClosure CloseLoops(const LoopJob& job) const;
+  // tracks it (PnP, enough inliers), a loop edge; then optimizes the graph. Reads the job and
+  // the appearance index, which only it touches (one search at a time: in Track, or on the
+  // worker).
+  LoopClosure CloseLoops(const LoopJob& job);
+  AppearanceIndex appearance_index;
+  int indexed_keyframes = 0;
   // Moves the keyframes as `closure` says (those made since its job by the same correction as
   // its newest) and the last pose with them. Returns the loops kept.
   int Apply(LoopClosure closure);
@@ -263,13 +272,31 @@ LoopJob RgbdOdometry::Impl::MakeLoopJob(std::shared_ptr<const FrameFeatures> fea
 }
 
 std::vector<int> RgbdOdometry::Impl::AppearanceCandidates(const LoopJob& job,
-                                                          const std::vector<int>& already) const {
+                                                          const std::vector<int>& already) {
   if (config.loop_appearance_candidates <= 0) return {};
+  // Keyframes made since the last search join the index first.
+  for (; indexed_keyframes <= job.newest; ++indexed_keyframes) {
+    const cv::Mat& descriptors =
+        job.keyframes[static_cast<std::size_t>(indexed_keyframes)]->strongest_descriptors;
+    if (descriptors.rows > 0 && descriptors.isContinuous()) {
+      appearance_index.Add(indexed_keyframes, descriptors.ptr<std::uint8_t>(), descriptors.rows);
+    }
+  }
   const cv::Mat& mine = job.keyframes[static_cast<std::size_t>(job.newest)]->strongest_descriptors;
   if (mine.rows < 2) return {};
+  const int last_old = job.newest - config.loop_min_keyframe_gap;
+  std::vector<int> shortlist;
+  if (config.appearance_shortlist > 0 && mine.isContinuous()) {
+    for (const auto& [votes, k] : appearance_index.MostAlike(
+             mine.ptr<std::uint8_t>(), mine.rows, last_old, config.appearance_shortlist)) {
+      shortlist.push_back(k);
+    }
+  } else {
+    for (int k = 0; k <= last_old; ++k) shortlist.push_back(k);
+  }
   const cv::BFMatcher matcher(cv::NORM_HAMMING);
   std::vector<std::pair<int, int>> scored;  // (matches, keyframe)
-  for (int k = 0; k + config.loop_min_keyframe_gap <= job.newest; ++k) {
+  for (const int k : shortlist) {
     if (std::find(already.begin(), already.end(), k) != already.end()) continue;
     const cv::Mat& theirs = job.keyframes[static_cast<std::size_t>(k)]->strongest_descriptors;
     if (theirs.rows < 2) continue;
@@ -290,7 +317,7 @@ std::vector<int> RgbdOdometry::Impl::AppearanceCandidates(const LoopJob& job,
   return best;
 }
 
-LoopClosure RgbdOdometry::Impl::CloseLoops(const LoopJob& job) const {
+LoopClosure RgbdOdometry::Impl::CloseLoops(const LoopJob& job) {
   const auto start = Clock::now();
   LoopClosure closure;
   closure.newest = job.newest;
@@ -326,7 +353,7 @@ LoopClosure RgbdOdometry::Impl::CloseLoops(const LoopJob& job) const {
     loop.from = k;
     loop.to = newest;
     loop.T_from_to = fit.T_K_C;
-    loop.information = fit.information;
+    loop.information = EdgeInformationOf(fit);
     loop.loop = true;
     edges.push_back(loop);
     ++added;
@@ -522,23 +549,26 @@ void RgbdOdometry::Impl::RefineByDepth(const FrameFeatures& features, const Keyf
   *T_K_C = refined;
   fit->depth_refined = true;
   fit->depth_rmse_m = report.rmse_m;
-  if (config.edge_information_from_alignment) {
-    AlignmentInformationConfig floor;
-    floor.floor_sigma_m = config.edge_sigma_m;
-    floor.floor_sigma_deg = config.edge_sigma_deg;
-    // The features fix what the depth leaves free (a wall's plane): their own information is
-    // added to the depth's.
-    fit->information = AlignmentInformation(report.hessian, report.centre, report.radius_m,
-                                            refined.translation(), floor) +
-                       EdgeInformation(config.edge_feature_sigma_m,
-                                       config.edge_feature_sigma_deg / kDegPerRad);
+  fit->alignment = report;
+}
+
+Eigen::Matrix<double, 6, 6> RgbdOdometry::Impl::EdgeInformationOf(const PoseFit& fit) const {
+  if (!fit.depth_refined || !config.edge_information_from_alignment) {
+    return EdgeInformation(config.edge_sigma_m, config.edge_sigma_deg / kDegPerRad);
   }
+  AlignmentInformationConfig floor;
+  floor.floor_sigma_m = config.edge_sigma_m;
+  floor.floor_sigma_deg = config.edge_sigma_deg;
+  // The features fix what the depth leaves free (a wall's plane): their own information is
+  // added to the depth's.
+  return AlignmentInformation(fit.alignment.hessian, fit.alignment.centre,
+                              fit.alignment.radius_m, fit.T_K_C.translation(), floor) +
+         EdgeInformation(config.edge_feature_sigma_m, config.edge_feature_sigma_deg / kDegPerRad);
 }
 
 PoseFit RgbdOdometry::Impl::Fit(const FrameFeatures& features, const Keyframe& keyframe,
                                 const CameraIntrinsics& K) const {
   PoseFit fit;
-  fit.information = EdgeInformation(config.edge_sigma_m, config.edge_sigma_deg / kDegPerRad);
   if (features.descriptors.empty() || keyframe.descriptors.rows < 2) {
     fit.why = "no features to match";
     return fit;
@@ -721,7 +751,7 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
   impl.AddKeyframe(*features, T_W_C);
   report.new_keyframe = true;
   report.reference_keyframe = impl.current_keyframe;
-  impl.AddOdometryEdge(reference_keyframe, impl.current_keyframe, fit.information);
+  impl.AddOdometryEdge(reference_keyframe, impl.current_keyframe, impl.EdgeInformationOf(fit));
   if (config.loop_candidates <= 0) return finish();
   if (config.background_loop_closure) {
     {

@@ -53,6 +53,10 @@ struct OdometryConfig {
   /// robust loss). 0: candidates by pose only.
   int loop_appearance_candidates = 2;
   int appearance_descriptors = 300;
+  /// The appearance candidates are chosen among the keyframes an index of their descriptors
+  /// (AppearanceIndex: hashed bits, votes) ranks most alike, this many, instead of among every
+  /// older keyframe: the search then costs the same whatever the map's size. 0: every keyframe.
+  int appearance_shortlist = 10;
   /// Loop search, verification and graph solve on a thread of their own: Track hands each new
   /// keyframe over and returns, and the loops found move the keyframes at the start of a later
   /// Track (TrackingReport::loops_closed says when). For a live camera, whose frames must not
