@@ -9,6 +9,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <deque>
+#include <exception>
 #include <memory>
 #include <mutex>
 #include <thread>
@@ -430,7 +431,14 @@ void RgbdOdometry::Impl::WorkerLoop() {
       job.edges = edges;
       busy = true;
     }
-    LoopClosure closure = CloseLoops(job);
+    LoopClosure closure;
+    try {
+      closure = CloseLoops(job);
+    } catch (const std::exception&) {
+      // A search that fails (OpenCV or Ceres on a degenerate case, memory) closes no loop;
+      // tracking goes on without it rather than the process ending on this thread.
+      closure = LoopClosure{};
+    }
     {
       const std::lock_guard<std::mutex> lock(mutex);
       if (!closure.poses.empty()) results.push_back(std::move(closure));

@@ -157,32 +157,6 @@ NormalEquations Linearize(const std::vector<Eigen::Vector3f>& target,
   return equations;
 }
 
-// The directions the surface fixes (Zhang, Kaess and Singh, "On degeneracy of
-// optimization-based state estimation problems", ICRA 2016): H's eigenvectors, with rotations
-// scaled by the segment's radius so that both kinds are metres of point motion, whose
-// eigenvalue reaches min_ratio of the largest. The others (along a flat screen, about its
-// normal) are free: noise in the normals gives them a little curvature that is not information.
-struct ConstrainedSubspace {
-  Eigen::Matrix<double, 6, 6> scale = Eigen::Matrix<double, 6, 6>::Identity();  // S
-  Eigen::Matrix<double, 6, 6> vectors = Eigen::Matrix<double, 6, 6>::Zero();
-  Eigen::Matrix<double, 6, 1> values = Eigen::Matrix<double, 6, 1>::Zero();  // 0: free
-};
-
-ConstrainedSubspace Constrained(const Eigen::Matrix<double, 6, 6>& H, double radius_m,
-                                double min_ratio) {
-  ConstrainedSubspace subspace;
-  subspace.scale.diagonal().tail<3>().setConstant(1.0 / std::max(radius_m, 1e-3));
-  const Eigen::Matrix<double, 6, 6> scaled = subspace.scale * H * subspace.scale;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eigen(scaled);
-  const double largest = eigen.eigenvalues().maxCoeff();
-  subspace.vectors = eigen.eigenvectors();
-  for (int i = 0; i < 6; ++i) {
-    const double value = eigen.eigenvalues()(i);
-    subspace.values(i) = largest > 0.0 && value >= min_ratio * largest ? value : 0.0;
-  }
-  return subspace;
-}
-
 double MedianDepth(const ColoredPoints& segment) {
   std::vector<float> depths;
   depths.reserve(segment.size());
@@ -251,16 +225,16 @@ bool AlignSegments(const std::vector<Eigen::Vector3f>& target,
     if (equations.correspondences < 6) return false;
     // Steps only in the directions the surface fixes: the free ones stay where the pose-graph
     // estimate put them instead of following noise.
-    const ConstrainedSubspace subspace =
-        Constrained(equations.H, radius_m, config.min_eigenvalue_ratio);
-    const Eigen::Matrix<double, 6, 1> g_scaled = subspace.scale * equations.g;
+    const FixedDirections fixed =
+        FixedDirectionsOf(equations.H, radius_m, config.min_eigenvalue_ratio);
+    const Eigen::Matrix<double, 6, 1> g_scaled = fixed.scale * equations.g;
     Eigen::Matrix<double, 6, 1> step_scaled = Eigen::Matrix<double, 6, 1>::Zero();
     for (int i = 0; i < 6; ++i) {
-      if (subspace.values(i) <= 0.0) continue;
-      step_scaled -= subspace.vectors.col(i) * (subspace.vectors.col(i).dot(g_scaled) /
-                                                subspace.values(i));
+      if (fixed.values(i) <= 0.0) continue;
+      step_scaled -= fixed.vectors.col(i) * (fixed.vectors.col(i).dot(g_scaled) /
+                                                fixed.values(i));
     }
-    const Eigen::Matrix<double, 6, 1> step = subspace.scale * step_scaled;
+    const Eigen::Matrix<double, 6, 1> step = fixed.scale * step_scaled;
     if (!step.allFinite()) return false;
     const Eigen::Vector3d rotation = step.tail<3>();
     Eigen::Matrix3d turn = Eigen::Matrix3d::Identity();

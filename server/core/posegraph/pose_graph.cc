@@ -62,24 +62,30 @@ Eigen::Matrix3d Skew(const Eigen::Vector3d& a) {
 
 }  // namespace
 
+FixedDirections FixedDirectionsOf(const Eigen::Matrix<double, 6, 6>& H, double radius_m,
+                                  double min_ratio) {
+  FixedDirections fixed;
+  fixed.scale.diagonal().tail<3>().setConstant(1.0 / std::max(radius_m, 1e-3));
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eigen(fixed.scale * H *
+                                                                          fixed.scale);
+  const double largest = eigen.eigenvalues().maxCoeff();
+  fixed.vectors = eigen.eigenvectors();
+  for (int i = 0; i < 6; ++i) {
+    const double value = eigen.eigenvalues()(i);
+    fixed.values(i) = largest > 0.0 && value >= min_ratio * largest ? value : 0.0;
+  }
+  return fixed;
+}
+
 Eigen::Matrix<double, 6, 6> AlignmentInformation(const Eigen::Matrix<double, 6, 6>& H,
                                                  const Eigen::Vector3d& centre, double radius_m,
                                                  const Eigen::Vector3d& to_origin,
                                                  const AlignmentInformationConfig& config) {
   using Matrix6d = Eigen::Matrix<double, 6, 6>;
-  // The fixed directions: eigenvectors of H with rotations scaled to metres of point motion.
-  Matrix6d scale = Matrix6d::Identity();
-  scale.diagonal().tail<3>().setConstant(1.0 / std::max(radius_m, 1e-3));
-  const Eigen::SelfAdjointEigenSolver<Matrix6d> eigen(scale * H * scale);
-  const double largest = eigen.eigenvalues().maxCoeff();
-  Eigen::Matrix<double, 6, 1> kept = Eigen::Matrix<double, 6, 1>::Zero();
-  for (int i = 0; i < 6; ++i) {
-    const double value = eigen.eigenvalues()(i);
-    if (largest > 0.0 && value >= config.min_eigenvalue_ratio * largest) kept(i) = value;
-  }
-  const Matrix6d unscale = scale.inverse();
-  const Matrix6d about_centre =
-      unscale * eigen.eigenvectors() * kept.asDiagonal() * eigen.eigenvectors().transpose() * unscale;
+  const FixedDirections fixed = FixedDirectionsOf(H, radius_m, config.min_eigenvalue_ratio);
+  const Matrix6d unscale = fixed.scale.inverse();
+  const Matrix6d about_centre = unscale * fixed.vectors * fixed.values.asDiagonal() *
+                                fixed.vectors.transpose() * unscale;
   // The pose graph turns about to's origin: dt_centre = dt + dtheta x (centre - to_origin), so
   // H = M^T H_centre M with M = [I, -[centre - to_origin]x; 0, I].
   Matrix6d M = Matrix6d::Identity();

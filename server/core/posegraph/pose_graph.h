@@ -55,13 +55,25 @@ struct AlignmentInformationConfig {
   /// overstates the accuracy.
   double floor_sigma_m = 0.01;
   double floor_sigma_deg = 0.5;
-  /// A direction is fixed by the alignment when its curvature (rotations as motion of the points,
-  /// at the points' radius about their centre) reaches this fraction of the best fixed one;
-  /// weaker ones are free (a single plane's in-plane motion): noise in the normals gives them a
-  /// little curvature that is not information (Zhang, Kaess and Singh, "On degeneracy of
-  /// optimization-based state estimation problems", ICRA 2016).
+  /// FixedDirectionsOf's min_ratio: weaker directions keep no information.
   double min_eigenvalue_ratio = 0.05;
 };
+
+/// The directions an alignment fixes (Zhang, Kaess and Singh, "On degeneracy of
+/// optimization-based state estimation problems", ICRA 2016): the eigenvectors of its
+/// Gauss-Newton Hessian H (increments [dt; dtheta] turning about the points' centre), with
+/// rotations scaled by the points' radius so that both kinds are metres of point motion, whose
+/// eigenvalue reaches min_ratio of the largest. The others (along a flat screen, about its
+/// normal) are free: noise in the normals gives them a little curvature that is not information.
+struct FixedDirections {
+  /// S: scaled increments are S^-1 [dt; dtheta].
+  Eigen::Matrix<double, 6, 6> scale = Eigen::Matrix<double, 6, 6>::Identity();
+  /// Eigenvectors of S H S, as columns, and their eigenvalues; 0 where the direction is free.
+  Eigen::Matrix<double, 6, 6> vectors = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Matrix<double, 6, 1> values = Eigen::Matrix<double, 6, 1>::Zero();
+};
+[[nodiscard]] FixedDirections FixedDirectionsOf(const Eigen::Matrix<double, 6, 6>& H,
+                                                double radius_m, double min_ratio);
 
 /// The information matrix of T_from_to (PoseGraphEdge convention) measured by an alignment of
 /// `to`'s points onto `from`'s: H is its whitened Gauss-Newton Hessian (residuals divided by
