@@ -258,7 +258,7 @@ TEST(ObjectConstraints, ConfigValidation) {
   bad.min_overlap = 0.0;
   EXPECT_FALSE(bad.IsValid(&why));
   bad = {};
-  bad.floor_sigma_deg = -1.0;
+  bad.information.floor_sigma_deg = -1.0;
   EXPECT_FALSE(bad.IsValid(&why));
 }
 

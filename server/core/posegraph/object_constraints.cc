@@ -182,9 +182,9 @@ bool ObjectConstraintConfig::IsValid(std::string* why) const {
   }
   if (!(icp_first_max_distance_m >= icp_last_max_distance_m) || !(icp_last_max_distance_m > 0.0) ||
       !(min_overlap > 0.0 && min_overlap <= 1.0) ||
-      !(min_eigenvalue_ratio > 0.0 && min_eigenvalue_ratio < 1.0) || !(max_correction_m > 0.0) ||
-      !(max_correction_deg > 0.0) || !(point_sigma_m > 0.0) || !(floor_sigma_m > 0.0) ||
-      !(floor_sigma_deg > 0.0)) {
+      !(information.min_eigenvalue_ratio > 0.0 && information.min_eigenvalue_ratio < 1.0) ||
+      !(max_correction_m > 0.0) || !(max_correction_deg > 0.0) || !(point_sigma_m > 0.0) ||
+      !(information.floor_sigma_m > 0.0) || !(information.floor_sigma_deg > 0.0)) {
     *why =
         "object constraints: icp distances positive and shrinking, min_overlap in (0, 1], "
         "min_eigenvalue_ratio in (0, 1), correction limits and sigmas positive";
@@ -226,7 +226,7 @@ bool AlignSegments(const std::vector<Eigen::Vector3f>& target,
     // Steps only in the directions the surface fixes: the free ones stay where the pose-graph
     // estimate put them instead of following noise.
     const FixedDirections fixed =
-        FixedDirectionsOf(equations.H, radius_m, config.min_eigenvalue_ratio);
+        FixedDirectionsOf(equations.H, radius_m, config.information.min_eigenvalue_ratio);
     const Eigen::Matrix<double, 6, 1> g_scaled = fixed.scale * equations.g;
     Eigen::Matrix<double, 6, 1> step_scaled = Eigen::Matrix<double, 6, 1>::Zero();
     for (int i = 0; i < 6; ++i) {
@@ -262,13 +262,9 @@ bool AlignSegments(const std::vector<Eigen::Vector3f>& target,
     const NormalEquations at_optimum =
         Linearize(target, normals, tree, source, pose, centre, config.icp_last_max_distance_m,
                   config.point_sigma_m);
-    AlignmentInformationConfig floor;
-    floor.floor_sigma_m = config.floor_sigma_m;
-    floor.floor_sigma_deg = config.floor_sigma_deg;
-    floor.min_eigenvalue_ratio = config.min_eigenvalue_ratio;
     *information = AlignmentInformation(
         at_optimum.H / (config.point_sigma_m * config.point_sigma_m), centre, radius_m,
-        pose.translation(), floor);
+        pose.translation(), config.information);
   }
   *T_target_source = pose;
   return true;

@@ -44,17 +44,12 @@ struct ObjectConstraintConfig {
   double min_overlap = 0.5;
   double max_correction_m = 0.08;
   double max_correction_deg = 4.0;
-  /// A direction of motion is fixed by the views when its curvature (rotations as motion of
-  /// the segment's points) reaches this fraction of the best fixed one; weaker ones are left
-  /// free, neither moved by the alignment nor claimed in the information matrix (a flat
-  /// screen's plane).
-  double min_eigenvalue_ratio = 0.05;
   /// Noise of a segment point along the surface normal (model voxels are 5 mm).
   double point_sigma_m = 0.005;
-  /// The least uncertainty a constraint claims in any direction: segment points are not
-  /// independent (depth bias, calibration), so the Hessian alone overstates the accuracy.
-  double floor_sigma_m = 0.01;
-  double floor_sigma_deg = 0.5;
+  /// The constraint's information (floor, fixed directions). Its min_eigenvalue_ratio also
+  /// says which directions the alignment moves: the free ones (a flat screen's plane) are
+  /// neither moved nor claimed.
+  AlignmentInformationConfig information;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
