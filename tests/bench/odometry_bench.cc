@@ -1,12 +1,15 @@
 // RgbdOdometry on a recorded sequence, its poses ignored: time per frame, frames lost, keyframes,
 // and the trajectory scored against the sequence's own poses (ATE after rigid alignment, RPE).
 // Writes the estimated trajectory in TUM format (frame index / 30 as the stamp) for
-// `objmap eval-trajectory` and for other tools.
+// `objmap eval-trajectory` and for other tools: `out` holds each frame's pose when it was
+// tracked, `<out>.final` the poses after every loop closure and `<out>.reference` the
+// sequence's own, for per-frame errors (`objmap eval-trajectory ... --errors`).
 // With `background`, loops are searched and solved on the odometry's own thread
 // (OdometryConfig::background_loop_closure): the time per frame is then tracking alone.
 //   odometry_bench [sequence=../shared/data/redkitchen] [frames=all] [out=odometry.txt]
 //                  [sync|background]
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -54,6 +57,7 @@ int main(int argc, char** argv) {
   // the whole trajectory follows the keyframes that loop closures moved.
   std::vector<std::pair<int, Eigen::Isometry3d>> relative;
   std::vector<double> ms;
+  std::vector<std::size_t> keyframe_frames;  // per keyframe: the frame it was made from
   std::vector<double> loop_ms;  // per new keyframe: looking for loops (and solving when found)
   int lost = 0, relocalized = 0;
   for (std::size_t i = 0; i < count; ++i) {
@@ -77,6 +81,10 @@ int main(int argc, char** argv) {
                                               report.status != TrackingStatus::kInitialized) {
       loop_ms.push_back(report.loop_ms);
     }
+    if (report.new_keyframe) {
+      keyframe_frames.resize(static_cast<std::size_t>(report.reference_keyframe) + 1, 0);
+      keyframe_frames[static_cast<std::size_t>(report.reference_keyframe)] = i;
+    }
     estimated.push_back({stamp, report.T_W_C});
     relative.emplace_back(report.reference_keyframe,
                           odometry.KeyframePose(report.reference_keyframe).inverse() * report.T_W_C);
@@ -86,9 +94,10 @@ int main(int argc, char** argv) {
   for (std::size_t i = 0; i < corrected.size(); ++i) {
     corrected[i].T_W_C = odometry.KeyframePose(relative[i].first) * relative[i].second;
   }
-  if (!WriteTumTrajectory(out, estimated,
-                          "stamp tx ty tz qx qy qz qw (RgbdOdometry, " + reader->Describe() + ")",
-                          &why)) {
+  const std::string header = "stamp tx ty tz qx qy qz qw (RgbdOdometry, " + reader->Describe() + ")";
+  if (!WriteTumTrajectory(out, estimated, header, &why) ||
+      !WriteTumTrajectory(out + ".final", corrected, header + ", after loop closure", &why) ||
+      !WriteTumTrajectory(out + ".reference", reference, "the sequence's own poses", &why)) {
     std::fprintf(stderr, "odometry_bench: %s\n", why.c_str());
     return 1;
   }
@@ -111,6 +120,25 @@ int main(int argc, char** argv) {
                 "%.1f ms mean, p50 %.1f, p99 %.1f over %zu keyframes\n",
                 odometry.loops_closed(), loop_sum / std::max<std::size_t>(1, loop_ms.size()),
                 Percentile(loop_ms, 0.5), Percentile(loop_ms, 0.99), loop_ms.size());
+  }
+  // Each graph edge against the sequence's poses of its two keyframes' frames: how far the
+  // measurements the graph is solved from disagree with the reference, odometry and loops apart
+  // (reference_check tells how far the reference itself can be trusted).
+  for (const bool loops : {false, true}) {
+    std::vector<double> cm;
+    for (const PoseGraphEdge& edge : odometry.graph_edges()) {
+      if (edge.loop != loops) continue;
+      const Eigen::Isometry3d& A = reference[keyframe_frames[static_cast<std::size_t>(edge.from)]].T_W_C;
+      const Eigen::Isometry3d& B = reference[keyframe_frames[static_cast<std::size_t>(edge.to)]].T_W_C;
+      cm.push_back(100.0 * ((A.inverse() * B).inverse() * edge.T_from_to).translation().norm());
+    }
+    if (cm.empty()) continue;
+    double sum_sq = 0.0;
+    for (double value : cm) sum_sq += value * value;
+    std::printf("%s edges against the reference: %zu, translation differs by RMS %.2f cm, "
+                "median %.2f, max %.2f\n", loops ? "loop" : "odometry", cm.size(),
+                std::sqrt(sum_sq / static_cast<double>(cm.size())), Percentile(cm, 0.5),
+                Percentile(cm, 1.0));
   }
   TrajectoryErrors final_errors;
   if (EvaluateTrajectory(corrected, reference, TrajectoryEvaluationConfig{}, &final_errors, &why)) {
