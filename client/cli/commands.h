@@ -15,6 +15,9 @@ int RunEvalCommand(int argc, char** argv);
 /// `objmap eval-trajectory <estimated.txt> <reference.txt>`: ATE and RPE of a trajectory.
 int RunEvalTrajectoryCommand(int argc, char** argv);
 
+/// `objmap render <map-dir> --out FILE.png`: a picture of a map folder.
+int RunRenderCommand(int argc, char** argv);
+
 // Commands that talk to a running objmap_server (built with OBJMAP_WITH_GRPC).
 
 /// `objmap ingest <dataset>`: streams the keyframes of a recorded sequence to the server.

@@ -21,6 +21,7 @@ void PrintUsage(std::ostream& out) {
          "                                               score a map against ground truth\n"
          "  objmap eval-trajectory <estimated.txt> <reference.txt>\n"
          "                                               score a camera trajectory (ATE, RPE)\n"
+         "  objmap render <map-dir> --out FILE.png       a picture of a map (headless)\n"
 #ifdef OBJMAP_CLI_WITH_SERVER
          "commands for a running objmap_server (--server ADDR, default 127.0.0.1:50051):\n"
          "  objmap ingest <dataset>                      stream a sequence's keyframes\n"
@@ -42,6 +43,7 @@ const std::map<std::string, Command>& Commands() {
       {"segment", objmap::cli::RunSegmentCommand},
       {"eval", objmap::cli::RunEvalCommand},
       {"eval-trajectory", objmap::cli::RunEvalTrajectoryCommand},
+      {"render", objmap::cli::RunRenderCommand},
 #ifdef OBJMAP_CLI_WITH_SERVER
       {"ingest", objmap::cli::RunIngestCommand},
       {"inventory", objmap::cli::RunInventoryCommand},

@@ -208,6 +208,30 @@ void PrintSummary(const Mapper& mapper, const SequenceRunReport& report, double 
   std::cout << "wall time: " << std::setprecision(1) << wall_s << " s\n";
 }
 
+// The keyframes' final poses in the poses-file format (`objmap update-poses`, `objmap render`
+// takes the world's up from them), with the frame each was made from.
+bool WriteKeyframePoses(const SequenceRunReport& report, const Mapper& mapper,
+                        const std::string& path, std::string* why) {
+  std::ofstream out(path);
+  out << "# keyframe_id tx ty tz qx qy qz qw (T_W_C, camera to world)  # frame index\n";
+  char line[256];
+  for (const KeyframeReport& keyframe : report.keyframes) {
+    const KeyframeRecord* record = mapper.FindKeyframe(keyframe.result.keyframe_id);
+    if (record == nullptr) continue;
+    const Eigen::Quaterniond q(record->T_W_C.rotation());
+    const Eigen::Vector3d& t = record->T_W_C.translation();
+    std::snprintf(line, sizeof(line), "%lld %.9g %.9g %.9g %.9g %.9g %.9g %.9g  # frame %zu\n",
+                  static_cast<long long>(keyframe.result.keyframe_id), t.x(), t.y(), t.z(), q.x(),
+                  q.y(), q.z(), q.w(), keyframe.frame_index);
+    out << line;
+  }
+  if (!out) {
+    *why = path + ": write failed";
+    return false;
+  }
+  return true;
+}
+
 bool WriteTimings(const SequenceRunReport& report, const std::string& path, std::string* why) {
   std::ofstream out(path);
   out << "frame,detection_ms,segmentation_ms,association_ms,occupancy_ms,detections,used\n";
@@ -535,14 +559,16 @@ int RunMapCommand(int argc, char** argv) {
 
   const std::string out_dir = args.Get("--out", "");
   if (!WriteMapOutputs(mapper, out_dir, &why) ||
-      !WriteTimings(report, out_dir + "/timings.csv", &why)) {
+      !WriteTimings(report, out_dir + "/timings.csv", &why) ||
+      !WriteKeyframePoses(report, mapper, out_dir + "/keyframes.txt", &why)) {
     return Fail(why);
   }
   if (args.Has("--save-detections") &&
       !WriteDetectionsFile(args.Get("--save-detections", ""), recorder->recorded(), &why)) {
     return Fail(why);
   }
-  std::cout << "wrote " << out_dir << "/map.bt, objects.json, objects/*.ply, timings.csv"
+  std::cout << "wrote " << out_dir
+            << "/map.bt, objects.json, objects/*.ply, timings.csv, keyframes.txt"
             << (input.estimated ? ", trajectory.txt" : "") << "\n";
   return completed ? 0 : 1;
 }

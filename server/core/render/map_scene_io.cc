@@ -1,0 +1,109 @@
+#include "render/map_scene_io.h"
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "occupancy/occupancy_map.h"
+#include "pointcloud_io/pointcloud_io.h"
+#include "types/coco_classes.h"
+
+namespace objmap {
+namespace {
+
+bool ReadFile(const std::string& path, std::string* bytes, std::string* why) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) {
+    *why = path + ": cannot open";
+    return false;
+  }
+  std::ostringstream content;
+  content << file.rdbuf();
+  *bytes = content.str();
+  return true;
+}
+
+// The resolution line of an OctoMap binary file's header ("res 0.01").
+bool ResolutionOf(const std::string& bytes, double* resolution_m) {
+  std::istringstream header(bytes.substr(0, 512));
+  std::string line;
+  while (std::getline(header, line)) {
+    if (line.rfind("res ", 0) == 0) {
+      try {
+        *resolution_m = std::stod(line.substr(4));
+      } catch (const std::exception&) {
+        return false;
+      }
+      return *resolution_m > 0.0 && *resolution_m < 10.0;
+    }
+    if (line == "data") break;
+  }
+  return false;
+}
+
+}  // namespace
+
+bool ReadMapScene(const std::string& dir, PictureScene* scene, std::string* why) {
+  namespace fs = std::filesystem;
+  *scene = PictureScene();
+  const std::string map_path = (fs::path(dir) / "map.bt").string();
+  std::string bytes;
+  if (!ReadFile(map_path, &bytes, why)) return false;
+  OccupancyConfig occupancy_config;
+  if (!ResolutionOf(bytes, &occupancy_config.resolution_m)) {
+    *why = map_path + ": not an OctoMap binary file (no resolution in its header)";
+    return false;
+  }
+  OccupancyMap occupancy(occupancy_config);
+  if (!occupancy.ReadBinary(bytes, why)) {
+    *why = map_path + ": " + *why;
+    return false;
+  }
+  scene->structure_voxel_m = static_cast<float>(occupancy_config.resolution_m);
+  for (const Eigen::Vector3d& centre : occupancy.OccupiedVoxelCenters()) {
+    scene->structure_W.push_back(centre.cast<float>());
+  }
+
+  const std::string json_path = (fs::path(dir) / "objects.json").string();
+  if (!fs::exists(json_path)) return true;
+  if (!ReadFile(json_path, &bytes, why)) return false;
+  nlohmann::json document;
+  try {
+    document = nlohmann::json::parse(bytes);
+  } catch (const nlohmann::json::exception& error) {
+    *why = json_path + ": " + error.what();
+    return false;
+  }
+  if (!document.is_object() || !document.contains("objects") || !document["objects"].is_array()) {
+    *why = json_path + ": no \"objects\" list";
+    return false;
+  }
+  for (const nlohmann::json& entry : document["objects"]) {
+    try {
+      // objmap map marks inventory objects "in_inventory"; objmap export lists confirmed ones.
+      const bool counted = entry.value("in_inventory", entry.value("confirmed", false));
+      if (!counted) continue;
+      PictureObject object;
+      object.id = entry.at("id").get<ObjectId>();
+      object.class_name = entry.at("class").get<std::string>();
+      object.confidence = entry.value("confidence", 0.f);
+      const int class_id = CocoClassId(object.class_name);
+      const std::string ply =
+          entry.contains("ply")
+              ? (fs::path(dir) / entry["ply"].get<std::string>()).string()
+              : (fs::path(dir) / "objects" /
+                 (std::to_string(object.id) + "_" + CocoClassFileName(class_id) + ".ply"))
+                    .string();
+      std::vector<std::array<std::uint8_t, 3>> colours;
+      if (!ReadPly(ply, &object.points_W, &colours, why)) return false;
+      scene->objects.push_back(std::move(object));
+    } catch (const nlohmann::json::exception& error) {
+      *why = json_path + ": object " + entry.dump().substr(0, 80) + ": " + error.what();
+      return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace objmap
