@@ -1,6 +1,7 @@
 // Runs the `objmap` executable on a small rendered 7-Scenes folder, as a user would.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -11,6 +12,7 @@
 #include "run_objmap.h"
 #include "test_data.h"
 #include "test_scenes.h"
+#include "render/map_picture.h"
 #include "types/coco_classes.h"
 
 namespace objmap {
@@ -193,6 +195,110 @@ TEST_F(CliScene, EmptyOrMissingInputIsAClearError) {
   run = RunObjmap("map " + Path("seq") + " --out " + Path("o") + " --max-frames many");
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_NE(run.output.find("--max-frames expects a number"), std::string::npos) << run.output;
+}
+
+// The picture of the mapped scene from the first frame's camera: each inventory cup shows the
+// cup colour where its centroid projects, and the legend printed equals objects.json's inventory.
+TEST_F(CliScene, RenderShowsEachInventoryObjectInItsClassColour) {
+  const CommandResult map = RunObjmap(MapArguments(""));
+  ASSERT_EQ(map.exit_code, 0) << map.output;
+  std::ifstream keyframes(Path("out/keyframes.txt"));
+  int pose_lines = 0;
+  for (std::string line; std::getline(keyframes, line);) pose_lines += !line.empty() && line[0] != '#';
+  EXPECT_EQ(pose_lines, 4);
+
+  const Eigen::Isometry3d T_W_C =
+      testing::LookAt({-1.0, -0.2, 1.3}, Eigen::Vector3d(0, 0, 0.7));
+  const Eigen::Quaterniond q(T_W_C.rotation());
+  std::ostringstream camera;
+  camera.precision(12);
+  camera << T_W_C.translation().x() << " " << T_W_C.translation().y() << " "
+         << T_W_C.translation().z() << " " << q.x() << " " << q.y() << " " << q.z() << " " << q.w();
+  const CommandResult render = RunObjmap("render " + Path("out") + " --out " + Path("view.png") +
+                                         " --view camera --camera " + camera.str() +
+                                         " --size 640 480 --fov 50");
+  ASSERT_EQ(render.exit_code, 0) << render.output;
+  const cv::Mat picture = cv::imread(Path("view.png"));
+  ASSERT_EQ(picture.cols, 640);
+  ASSERT_EQ(picture.rows, 480);
+
+  std::ifstream json_file(Path("out/objects.json"));
+  const nlohmann::json objects = nlohmann::json::parse(json_file);
+  std::string legend = "legend:";
+  for (const auto& entry : objects["inventory"]) {
+    legend += " " + entry["class"].get<std::string>() + " " + std::to_string(entry["count"].get<int>()) + ";";
+  }
+  EXPECT_NE(render.output.find(legend + "\n"), std::string::npos) << legend << "\n" << render.output;
+
+  const double f = 240.0 / std::tan(25.0 * M_PI / 180.0);
+  const RgbColour cup = ClassColour("cup");
+  int checked = 0;
+  for (const auto& object : objects["objects"]) {
+    if (!object["in_inventory"].get<bool>()) continue;
+    const Eigen::Vector3d centroid(object["centroid"][0].get<double>(), object["centroid"][1].get<double>(),
+                                   object["centroid"][2].get<double>());
+    const Eigen::Vector3d p = T_W_C.inverse() * centroid;
+    ASSERT_GT(p.z(), 0.0);
+    const int u = static_cast<int>(std::lround(f * p.x() / p.z() + 320.0));
+    const int v = static_cast<int>(std::lround(f * p.y() / p.z() + 240.0));
+    ASSERT_TRUE(u >= 0 && v >= 0 && u < 640 && v < 480) << u << " " << v;
+    const cv::Vec3b bgr = picture.at<cv::Vec3b>(v, u);
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_NEAR(bgr[2 - c], cup[static_cast<std::size_t>(c)], 12)
+          << "object " << object["id"] << " at pixel " << u << "," << v;
+    }
+    ++checked;
+  }
+  EXPECT_EQ(checked, 2);
+
+  // A top view of the same map, up given: a picture that is neither blank nor uniform.
+  const CommandResult top =
+      RunObjmap("render " + Path("out") + " --out " + Path("top.png") + " --view top --up z");
+  ASSERT_EQ(top.exit_code, 0) << top.output;
+  const cv::Mat top_picture = cv::imread(Path("top.png"));
+  ASSERT_FALSE(top_picture.empty());
+  cv::Scalar mean, deviation;
+  cv::meanStdDev(top_picture, mean, deviation);
+  EXPECT_GT(deviation[0] + deviation[1] + deviation[2], 30.0);
+}
+
+TEST_F(CliScene, RenderRefusesBadInputWithTheReason) {
+  CommandResult run = RunObjmap("render " + Path("nothing") + " --out " + Path("x.png"));
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.output.find("map.bt"), std::string::npos) << run.output;
+  // A header without its data, and a real map cut short.
+  fs::create_directories(Path("corrupt"));
+  std::ofstream(Path("corrupt/map.bt")) << "# Octomap OcTree binary file\nid OcTree\nres 0.01\ndata\nxx";
+  run = RunObjmap("render " + Path("corrupt") + " --out " + Path("x.png"));
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.output.find("corrupt/map.bt: not an OctoMap"), std::string::npos) << run.output;
+  ASSERT_EQ(RunObjmap(MapArguments("")).exit_code, 0);
+  fs::create_directories(Path("cut"));
+  {
+    std::ifstream whole(Path("out/map.bt"), std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(whole)), std::istreambuf_iterator<char>());
+    ASSERT_GT(bytes.size(), 400u);
+    std::ofstream(Path("cut/map.bt"), std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  }
+  run = RunObjmap("render " + Path("cut") + " --out " + Path("x.png"));
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.output.find("cut/map.bt"), std::string::npos) << run.output;
+  // objects.json that is not JSON.
+  fs::copy_file(Path("out/map.bt"), Path("corrupt/map.bt"), fs::copy_options::overwrite_existing);
+  std::ofstream(Path("corrupt/objects.json")) << "{\"objects\": [";
+  run = RunObjmap("render " + Path("corrupt") + " --out " + Path("x.png"));
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.output.find("corrupt/objects.json"), std::string::npos) << run.output;
+  run = RunObjmap("render " + Path("corrupt") + " --out " + Path("x.png") + " --view sideways");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.output.find("--view must be"), std::string::npos) << run.output;
+  run = RunObjmap("render " + Path("corrupt") + " --out " + Path("x.png") + " --view camera");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.output.find("--camera"), std::string::npos) << run.output;
+  run = RunObjmap("render " + Path("out") + " --out " + Path("x.png") + " --class giraffe");
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.output.find("giraffe"), std::string::npos) << run.output;
+  EXPECT_FALSE(fs::exists(Path("x.png")));
 }
 
 TEST(CliSegment, WritesOneLabelPerPoint) {

@@ -24,20 +24,27 @@ bool ReadFile(const std::string& path, std::string* bytes, std::string* why) {
   return true;
 }
 
-// The resolution line of an OctoMap binary file's header ("res 0.01").
-bool ResolutionOf(const std::string& bytes, double* resolution_m) {
-  std::istringstream header(bytes.substr(0, 512));
+// The header of an OctoMap binary file: "id OcTree", "size N" (nodes), "res R" (metres), then
+// "data". False when a line is missing or malformed.
+bool ReadHeader(const std::string& bytes, std::size_t* nodes, double* resolution_m) {
+  std::istringstream header(bytes.substr(0, 1024));
   std::string line;
+  bool id = false, size = false, resolution = false;
   while (std::getline(header, line)) {
-    if (line.rfind("res ", 0) == 0) {
-      try {
-        *resolution_m = std::stod(line.substr(4));
-      } catch (const std::exception&) {
-        return false;
+    try {
+      if (line == "id OcTree") id = true;
+      if (line.rfind("size ", 0) == 0) {
+        *nodes = std::stoul(line.substr(5));
+        size = true;
       }
-      return *resolution_m > 0.0 && *resolution_m < 10.0;
+      if (line.rfind("res ", 0) == 0) {
+        *resolution_m = std::stod(line.substr(4));
+        resolution = *resolution_m > 0.0 && *resolution_m < 10.0;
+      }
+    } catch (const std::exception&) {
+      return false;
     }
-    if (line == "data") break;
+    if (line == "data") return id && size && resolution;
   }
   return false;
 }
@@ -51,13 +58,19 @@ bool ReadMapScene(const std::string& dir, PictureScene* scene, std::string* why)
   std::string bytes;
   if (!ReadFile(map_path, &bytes, why)) return false;
   OccupancyConfig occupancy_config;
-  if (!ResolutionOf(bytes, &occupancy_config.resolution_m)) {
-    *why = map_path + ": not an OctoMap binary file (no resolution in its header)";
+  std::size_t nodes = 0;
+  if (!ReadHeader(bytes, &nodes, &occupancy_config.resolution_m)) {
+    *why = map_path + ": not an OctoMap binary file (its header needs id OcTree, size, res, data)";
     return false;
   }
   OccupancyMap occupancy(occupancy_config);
   if (!occupancy.ReadBinary(bytes, why)) {
     *why = map_path + ": " + *why;
+    return false;
+  }
+  const OccupancyCounts counts = occupancy.Counts();
+  if (nodes > 0 && counts.occupied + counts.free == 0) {
+    *why = map_path + ": its header names " + std::to_string(nodes) + " nodes, its data none";
     return false;
   }
   scene->structure_voxel_m = static_cast<float>(occupancy_config.resolution_m);
