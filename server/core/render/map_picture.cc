@@ -529,7 +529,7 @@ bool WritePicturePng(const MapPicture& picture, const std::string& path, std::st
   cv::Mat bgr;
   cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
   try {
-    if (!cv::imwrite(path, bgr)) {
+    if (!cv::imwrite(path, bgr, {cv::IMWRITE_PNG_COMPRESSION, 6})) {
       *why = path + ": could not write the PNG (no such folder, or no permission)";
       return false;
     }

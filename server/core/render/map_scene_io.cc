@@ -1,11 +1,12 @@
 #include "render/map_scene_io.h"
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <octomap/OcTree.h>
 #include <sstream>
 
-#include "occupancy/occupancy_map.h"
 #include "pointcloud_io/pointcloud_io.h"
 #include "types/coco_classes.h"
 
@@ -57,25 +58,35 @@ bool ReadMapScene(const std::string& dir, PictureScene* scene, std::string* why)
   const std::string map_path = (fs::path(dir) / "map.bt").string();
   std::string bytes;
   if (!ReadFile(map_path, &bytes, why)) return false;
-  OccupancyConfig occupancy_config;
   std::size_t nodes = 0;
-  if (!ReadHeader(bytes, &nodes, &occupancy_config.resolution_m)) {
+  double resolution_m = 0.0;
+  if (!ReadHeader(bytes, &nodes, &resolution_m)) {
     *why = map_path + ": not an OctoMap binary file (its header needs id OcTree, size, res, data)";
     return false;
   }
-  OccupancyMap occupancy(occupancy_config);
-  if (!occupancy.ReadBinary(bytes, why)) {
-    *why = map_path + ": " + *why;
+  // Stock OctoMap reads the file once (it checks the node count against the header); pruned
+  // occupied nodes are expanded to voxels of the map's resolution.
+  octomap::OcTree tree(resolution_m);
+  std::istringstream stream(bytes);
+  if (!tree.readBinary(stream) || tree.size() != nodes) {
+    *why = map_path + ": its data is cut short or corrupt (" + std::to_string(tree.size()) +
+           " nodes read, " + std::to_string(nodes) + " in its header)";
     return false;
   }
-  const OccupancyCounts counts = occupancy.Counts();
-  if (nodes > 0 && counts.occupied + counts.free == 0) {
-    *why = map_path + ": its header names " + std::to_string(nodes) + " nodes, its data none";
-    return false;
-  }
-  scene->structure_voxel_m = static_cast<float>(occupancy_config.resolution_m);
-  for (const Eigen::Vector3d& centre : occupancy.OccupiedVoxelCenters()) {
-    scene->structure_W.push_back(centre.cast<float>());
+  scene->structure_voxel_m = static_cast<float>(resolution_m);
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (!tree.isNodeOccupied(*it)) continue;
+    const int per_side = static_cast<int>(std::lround(it.getSize() / resolution_m));
+    const Eigen::Vector3f corner =
+        Eigen::Vector3f(it.getX(), it.getY(), it.getZ()) - Eigen::Vector3f::Constant(static_cast<float>(it.getSize() / 2));
+    const float leaf = static_cast<float>(resolution_m);
+    for (int x = 0; x < per_side; ++x) {
+      for (int y = 0; y < per_side; ++y) {
+        for (int z = 0; z < per_side; ++z) {
+          scene->structure_W.push_back(corner + leaf * Eigen::Vector3f(x + 0.5f, y + 0.5f, z + 0.5f));
+        }
+      }
+    }
   }
 
   const std::string json_path = (fs::path(dir) / "objects.json").string();
