@@ -29,7 +29,10 @@ constexpr char kCommand[] = "export";
 // Exporting a big map moves tens of megabytes; a minute is a better default than 30 s.
 constexpr double kExportTimeoutS = 120.0;
 
-int ExportOctomap(MapClient* client, const std::vector<double>& region, const std::string& path) {
+}  // namespace
+
+int ExportOctomap(const std::string& command, MapClient* client, const std::vector<double>& region,
+                  const std::string& path) {
   v1::GetOctomapRequest request;
   if (region.size() == 6) {
     *request.mutable_region() =
@@ -37,18 +40,20 @@ int ExportOctomap(MapClient* client, const std::vector<double>& region, const st
   }
   v1::GetOctomapResponse response;
   const grpc::Status status = client->GetOctomap(request, &response);
-  if (!status.ok()) return FailWithStatus(kCommand, status);
+  if (!status.ok()) return FailWithStatus(command, status);
   const std::filesystem::path parent = std::filesystem::path(path).parent_path();
   std::error_code error;
   if (!parent.empty()) std::filesystem::create_directories(parent, error);
-  if (error) return Fail(kCommand, parent.string() + ": " + error.message());
+  if (error) return Fail(command, parent.string() + ": " + error.message());
   std::ofstream file(path, std::ios::binary);
   file.write(response.bt().data(), static_cast<std::streamsize>(response.bt().size()));
-  if (!file) return Fail(kCommand, path + ": write failed");
+  if (!file) return Fail(command, path + ": write failed");
   std::cout << "wrote " << path << " (" << response.leaf_count() << " leaves, map version "
             << response.map_version() << ")\n";
   return kExitOk;
 }
+
+namespace {
 
 // "<id>_<class>.ply", the class made safe for file names as `objmap map` does.
 std::string PlyName(const v1::Object& object) {
@@ -71,8 +76,10 @@ bool WriteObject(const v1::Object& object, const std::filesystem::path& dir, Jso
   return true;
 }
 
-int ExportObjects(MapClient* client, const std::vector<double>& region, bool all,
-                  const std::string& dir) {
+}  // namespace
+
+int ExportObjects(const std::string& command, MapClient* client, const std::vector<double>& region,
+                  bool all, const std::string& dir) {
   v1::QueryObjectsRequest request;
   if (region.size() == 6) {
     *request.mutable_region() =
@@ -82,28 +89,26 @@ int ExportObjects(MapClient* client, const std::vector<double>& region, bool all
   request.set_include_unconfirmed(all);
   v1::QueryObjectsResponse response;
   const grpc::Status status = client->QueryObjects(request, &response);
-  if (!status.ok()) return FailWithStatus(kCommand, status);
+  if (!status.ok()) return FailWithStatus(command, status);
   std::error_code error;
   std::filesystem::create_directories(dir, error);
-  if (error) return Fail(kCommand, dir + ": " + error.message());
+  if (error) return Fail(command, dir + ": " + error.message());
   Json objects = Json::array();
   std::string why;
   for (const v1::Object& object : response.objects()) {
     Json entry;
-    if (!WriteObject(object, dir, &entry, &why)) return Fail(kCommand, why);
+    if (!WriteObject(object, dir, &entry, &why)) return Fail(command, why);
     objects.push_back(std::move(entry));
   }
   const Json document = {{"map_version", response.map_version()}, {"objects", objects}};
   const std::string json_path = (std::filesystem::path(dir) / "objects.json").string();
   std::ofstream file(json_path);
   file << document.dump(2) << "\n";
-  if (!file) return Fail(kCommand, json_path + ": write failed");
+  if (!file) return Fail(command, json_path + ": write failed");
   std::cout << "wrote " << response.objects_size() << " objects to " << dir
             << " (objects.json and one .ply each, map version " << response.map_version() << ")\n";
   return kExitOk;
 }
-
-}  // namespace
 
 int RunExportCommand(int argc, char** argv) {
   Arguments args(argc, argv, WithServerFlags({"--octomap", "--objects"}), {"--all", "--help"},
@@ -120,11 +125,12 @@ int RunExportCommand(int argc, char** argv) {
     return UsageError(args, usage);
   }
   if (args.Has("--octomap")) {
-    const int code = ExportOctomap(client.get(), region, args.Get("--octomap", ""));
+    const int code = ExportOctomap(kCommand, client.get(), region, args.Get("--octomap", ""));
     if (code != kExitOk) return code;
   }
   if (args.Has("--objects")) {
-    return ExportObjects(client.get(), region, args.Has("--all"), args.Get("--objects", ""));
+    return ExportObjects(kCommand, client.get(), region, args.Has("--all"),
+                         args.Get("--objects", ""));
   }
   return kExitOk;
 }

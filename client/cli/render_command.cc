@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <set>
 #include <string>
 
 #include "arguments.h"
@@ -12,6 +13,12 @@
 #include "poses_file.h"
 #include "render/map_picture.h"
 #include "render/map_scene_io.h"
+#ifdef OBJMAP_CLI_WITH_SERVER
+#include <unistd.h>
+
+#include "objmap/conversions.h"
+#include "server_common.h"
+#endif
 
 namespace objmap::cli {
 namespace {
@@ -19,9 +26,16 @@ namespace {
 constexpr char kRenderUsage[] =
     "objmap render: a picture of a map, headless (PNG).\n"
     "usage: objmap render <map-dir> --out FILE.png [options]\n"
+#ifdef OBJMAP_CLI_WITH_SERVER
+    "       objmap render --server ADDR --out FILE.png [options]\n"
+#endif
     "  <map-dir>               written by `objmap map --out` or `objmap export`: map.bt,\n"
     "                          objects.json, objects/*.ply (keyframes.txt, when there, gives\n"
     "                          the up direction)\n"
+#ifdef OBJMAP_CLI_WITH_SERVER
+    "  --server ADDR           a running objmap_server instead: its OctoMap, confirmed\n"
+    "                          objects and keyframe poses (the server options below)\n"
+#endif
     "  --view V                top | perspective (default) | camera\n"
     "  --camera TX TY TZ QX QY QZ QW\n"
     "                          the camera pose T_W_C of --view camera (x right, y down,\n"
@@ -40,6 +54,27 @@ constexpr char kRenderUsage[] =
 
 constexpr int kOk = 0, kError = 1, kUsage = 2;
 
+#ifdef OBJMAP_CLI_WITH_SERVER
+// Reads the server's map into a folder as `objmap export` writes it, and its keyframe poses.
+int FetchFromServer(Arguments& args, const std::vector<double>& region, const std::string& dir,
+                    std::vector<Eigen::Isometry3d>* keyframe_poses) {
+  constexpr char kCommand[] = "render";
+  std::unique_ptr<MapClient> client = MakeClient(args, 120.0);
+  int code = ExportOctomap(kCommand, client.get(), region, dir + "/map.bt");
+  if (code == kOk) code = ExportObjects(kCommand, client.get(), region, false, dir);
+  if (code != kOk) return code;
+  v1::ListKeyframesResponse response;
+  const grpc::Status status = client->ListKeyframes(v1::ListKeyframesRequest(), &response);
+  if (!status.ok()) return FailWithStatus(kCommand, status);
+  std::string why;
+  for (const v1::KeyframeInfo& keyframe : response.keyframes()) {
+    Eigen::Isometry3d T_W_C;
+    if (PoseFromProto(keyframe.t_w_c(), &T_W_C, &why)) keyframe_poses->push_back(T_W_C);
+  }
+  return kOk;
+}
+#endif
+
 bool ParseUp(const std::string& text, Eigen::Vector3d* up) {
   const std::string axis = text.size() == 2 && text[0] == '-' ? text.substr(1) : text;
   const double sign = axis.size() < text.size() ? -1.0 : 1.0;
@@ -53,13 +88,19 @@ bool ParseUp(const std::string& text, Eigen::Vector3d* up) {
 }  // namespace
 
 int RunRenderCommand(int argc, char** argv) {
-  Arguments args(argc, argv, {"--out", "--view", "--class", "--up", "--fov"},
-                 {"--help", "--no-labels", "--no-legend", "--no-scale-bar"},
+  std::set<std::string> flags = {"--out", "--view", "--class", "--up", "--fov"};
+  std::string usage = kRenderUsage;
+#ifdef OBJMAP_CLI_WITH_SERVER
+  flags = WithServerFlags(flags);
+  usage += kServerOptionsUsage;
+#endif
+  Arguments args(argc, argv, flags, {"--help", "--no-labels", "--no-legend", "--no-scale-bar"},
                  {{"--camera", 7}, {"--size", 2}, {"--region", 6}});
   if (args.Has("--help")) {
-    std::cout << kRenderUsage;
+    std::cout << usage;
     return kOk;
   }
+  const bool from_server = args.Has("--server");
   PictureConfig config;
   if (!ParsePictureView(args.Get("--view", "perspective"), &config.view)) {
     args.SetError("--view must be top, perspective or camera, not " + args.Get("--view", ""));
@@ -103,18 +144,44 @@ int RunRenderCommand(int argc, char** argv) {
   }
   std::string why;
   if (args.error().empty() && !config.IsValid(&why)) args.SetError(why);
-  if (!args.error().empty() || args.positional().size() != 1 || !args.Has("--out")) {
-    std::cerr << (args.error().empty() ? "" : args.error() + "\n") << kRenderUsage;
+  if (!args.error().empty() || args.positional().size() != (from_server ? 0u : 1u) ||
+      !args.Has("--out")) {
+    std::cerr << (args.error().empty() ? "" : args.error() + "\n") << usage;
     return kUsage;
   }
   const auto start = std::chrono::steady_clock::now();
-  const std::string dir = args.positional()[0];
+  std::string dir = from_server ? "" : args.positional()[0];
+  std::vector<Eigen::Isometry3d> keyframe_poses;
+#ifdef OBJMAP_CLI_WITH_SERVER
+  // The server's map goes through a folder of its own, removed whatever happens.
+  struct RemovedAtExit {
+    std::string path;
+    ~RemovedAtExit() {
+      std::error_code ignored;
+      if (!path.empty()) std::filesystem::remove_all(path, ignored);
+    }
+  } fetched;
+  if (from_server) {
+    fetched.path = (std::filesystem::temp_directory_path() /
+                    ("objmap_render_" + std::to_string(::getpid())))
+                       .string();
+    dir = fetched.path;
+    const int code = FetchFromServer(args, region, dir, &keyframe_poses);
+    if (code != kOk) return code;
+  }
+#endif
   PictureScene scene;
   if (!ReadMapScene(dir, &scene, &why)) {
     std::cerr << "objmap render: " << why << "\n";
     return kError;
   }
-  if (up_text == "auto") {
+  if (up_text == "auto" && from_server) {
+    if (const auto up = UpFromCameras(keyframe_poses)) {
+      config.up_W = *up;
+    } else {
+      std::cout << "up: +z (the server has no keyframe poses to tell it; --up to choose)\n";
+    }
+  } else if (up_text == "auto") {
     const std::string keyframes = (std::filesystem::path(dir) / "keyframes.txt").string();
     std::optional<Eigen::Vector3d> up;
     if (std::filesystem::exists(keyframes)) {
@@ -151,7 +218,8 @@ int RunRenderCommand(int argc, char** argv) {
   std::snprintf(line, sizeof line,
                 "rendered %s (%s view, up %.2f %.2f %.2f): %zu structure voxels, %zu objects, "
                 "scale bar %g m = %d px; wrote %s (%dx%d) in %.0f ms\n",
-                dir.c_str(), PictureViewName(config.view), config.up_W.x(), config.up_W.y(),
+                from_server ? args.Get("--server", "").c_str() : dir.c_str(),
+                PictureViewName(config.view), config.up_W.x(), config.up_W.y(),
                 config.up_W.z(), scene.structure_W.size(), scene.objects.size(),
                 picture.scale_bar_m, picture.scale_bar_px, out.c_str(), picture.width,
                 picture.height, ms);

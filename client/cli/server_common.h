@@ -43,6 +43,16 @@ int Fail(const std::string& command, const std::string& message);
 /// Prints the argument error (if any) and the usage on stderr; returns kExitUsage.
 int UsageError(const Arguments& args, const std::string& usage);
 
+/// The server's OctoMap (only `region` when it has 6 numbers) written to `path` as a .bt file;
+/// messages name `command`. Returns the exit code.
+int ExportOctomap(const std::string& command, MapClient* client, const std::vector<double>& region,
+                  const std::string& path);
+/// The server's confirmed objects (all of them with `all`; only those centred in `region` when
+/// it has 6 numbers) written to `dir`: <id>_<class>.ply each and objects.json. Returns the exit
+/// code.
+int ExportObjects(const std::string& command, MapClient* client, const std::vector<double>& region,
+                  bool all, const std::string& dir);
+
 /// "(x, y, z)" with millimetre precision.
 [[nodiscard]] std::string FormatPoint(const v1::Vec3& p);
 

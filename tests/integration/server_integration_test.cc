@@ -600,6 +600,37 @@ TEST_F(ServerIntegration, CliInventoryFreeAndExportAgreeWithTheApi) {
       << on_server.output;
 }
 
+// objmap render --server: a picture of the server's map whose legend is the server's inventory.
+TEST_F(ServerIntegration, CliRenderDrawsTheServersInventory) {
+  const fs::path picture = shared().dir / "render" / "top.png";
+  fs::create_directories(picture.parent_path());
+  const testing::CommandResult render = testing::RunObjmap(
+      "render --server " + shared().server->address() + " --out " + picture.string() +
+      " --view top");
+  ASSERT_EQ(render.exit_code, 0) << render.output;
+  // "legend: chair 3; cup 2; ...": every inventory class with its count (unknown objects, which
+  // the inventory does not count, may come on top).
+  const std::size_t legend = render.output.find("legend:");
+  ASSERT_NE(legend, std::string::npos) << render.output;
+  const std::string line = render.output.substr(legend, render.output.find('\n', legend) - legend);
+  for (const auto& [name, ids] : shared().inventory_after.back()) {
+    EXPECT_NE(line.find(" " + name + " " + std::to_string(ids.size()) + ";"), std::string::npos)
+        << name << " " << ids.size() << " missing in: " << line;
+  }
+  std::ifstream file(picture, std::ios::binary);
+  const std::string png((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  ASSERT_GT(png.size(), 1000u);
+  EXPECT_EQ(png.substr(1, 3), "PNG");
+  // The folder the map went through (objmap_render_<pid>) is gone.
+  for (const auto& entry : fs::directory_iterator(fs::temp_directory_path())) {
+    const std::string name = entry.path().filename().string();
+    const bool render_folder =
+        entry.is_directory() && name.rfind("objmap_render_", 0) == 0 &&
+        name.find_first_not_of("0123456789", 14) == std::string::npos;
+    EXPECT_FALSE(render_folder) << entry.path();
+  }
+}
+
 TEST_F(ServerIntegration, CliExportsKeyframePosesThatUpdatePosesTakesBackUnmoved) {
   const std::string poses = (shared().dir / "poses.txt").string();
   const std::string server = " --server " + shared().server->address();
