@@ -36,7 +36,7 @@ constexpr char kRenderUsage[] =
     "  --server ADDR           a running objmap_server instead: its OctoMap, confirmed\n"
     "                          objects and keyframe poses (the server options below)\n"
 #endif
-    "  --view V                top | perspective (default) | camera\n"
+    "  --view V                top | perspective (default; camera with --camera) | camera\n"
     "  --camera TX TY TZ QX QY QZ QW\n"
     "                          the camera pose T_W_C of --view camera (x right, y down,\n"
     "                          z forward)\n"
@@ -102,7 +102,9 @@ int RunRenderCommand(int argc, char** argv) {
   }
   const bool from_server = args.Has("--server");
   PictureConfig config;
-  if (!ParsePictureView(args.Get("--view", "perspective"), &config.view)) {
+  // A camera pose alone asks for the camera view.
+  const std::string default_view = args.Has("--camera") ? "camera" : "perspective";
+  if (!ParsePictureView(args.Get("--view", default_view), &config.view)) {
     args.SetError("--view must be top, perspective or camera, not " + args.Get("--view", ""));
   }
   const std::vector<double> size = args.GetNumbers("--size");
@@ -115,6 +117,10 @@ int RunRenderCommand(int argc, char** argv) {
   const std::vector<double> camera = args.GetNumbers("--camera");
   if (config.view == PictureView::kCamera && camera.size() != 7) {
     args.SetError("--view camera needs --camera TX TY TZ QX QY QZ QW");
+  }
+  if (config.view != PictureView::kCamera && !camera.empty()) {
+    args.SetError("--camera gives the pose of --view camera, not of --view " +
+                  args.Get("--view", ""));
   }
   if (camera.size() == 7) {
     const Eigen::Quaterniond q(camera[6], camera[3], camera[4], camera[5]);

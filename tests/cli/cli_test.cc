@@ -295,6 +295,11 @@ TEST_F(CliScene, RenderRefusesBadInputWithTheReason) {
   run = RunObjmap("render " + Path("corrupt") + " --out " + Path("x.png") + " --view camera");
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_NE(run.output.find("--camera"), std::string::npos) << run.output;
+  run = RunObjmap("render " + Path("corrupt") + " --out " + Path("x.png") +
+                  " --view top --camera 0 0 0 0 0 0 1");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.output.find("--camera gives the pose of --view camera"), std::string::npos)
+      << run.output;
   run = RunObjmap("render " + Path("out") + " --out " + Path("x.png") + " --class giraffe");
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_NE(run.output.find("giraffe"), std::string::npos) << run.output;
