@@ -109,9 +109,13 @@ int RunRenderCommand(int argc, char** argv) {
   }
   const std::vector<double> size = args.GetNumbers("--size");
   if (size.size() == 2) {
-    config.width = static_cast<int>(size[0]);
-    config.height = static_cast<int>(size[1]);
-    if (config.width != size[0] || config.height != size[1]) args.SetError("--size takes whole pixels");
+    if (!(size[0] >= 1 && size[0] <= 1e5 && size[1] >= 1 && size[1] <= 1e5)) {
+      args.SetError("--size: the picture must be 64 to 8192 pixels wide and high");
+    } else {
+      config.width = static_cast<int>(size[0]);
+      config.height = static_cast<int>(size[1]);
+      if (config.width != size[0] || config.height != size[1]) args.SetError("--size takes whole pixels");
+    }
   }
   config.fov_deg = args.GetNumber("--fov", config.fov_deg);
   const std::vector<double> camera = args.GetNumbers("--camera");

@@ -295,6 +295,9 @@ TEST_F(CliScene, RenderRefusesBadInputWithTheReason) {
   run = RunObjmap("render " + Path("corrupt") + " --out " + Path("x.png") + " --view camera");
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_NE(run.output.find("--camera"), std::string::npos) << run.output;
+  run = RunObjmap("render " + Path("corrupt") + " --out " + Path("x.png") + " --size 1e12 10");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.output.find("--size"), std::string::npos) << run.output;
   run = RunObjmap("render " + Path("corrupt") + " --out " + Path("x.png") +
                   " --view top --camera 0 0 0 0 0 0 1");
   EXPECT_EQ(run.exit_code, 2);
