@@ -84,8 +84,12 @@ TEST_F(RosNodeCamera, PlaysARecordingIntoTheMap) {
   ASSERT_TRUE(WaitForService("/objmap_node_oni/status", node.get())) << node->Log();
   objmap_msgs::Status status;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  // A frame is counted when read and mapped a little later (the map server's queue): wait for
+  // both.
   while (ros::service::call("/objmap_node_oni/status", status) &&
-         status.response.frames_received < kFrames && std::chrono::steady_clock::now() < deadline) {
+         (status.response.frames_received < kFrames ||
+          status.response.keyframes + status.response.frames_rejected < kFrames) &&
+         std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
   EXPECT_EQ(status.response.frames_received, kFrames) << node->Log();
@@ -142,8 +146,12 @@ TEST_F(RosNodeCamera, EstimatesThePosesOfARecordingAndPublishesThemOnTfAndAsAPat
   ASSERT_TRUE(WaitForService("/objmap_node_estimate/status", node.get())) << node->Log();
   objmap_msgs::Status status;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(180);
+  // A frame is counted when read and mapped a little later (the map server's queue): wait for
+  // both.
   while (ros::service::call("/objmap_node_estimate/status", status) &&
-         status.response.frames_received < kFrames && std::chrono::steady_clock::now() < deadline) {
+         (status.response.frames_received < kFrames ||
+          status.response.keyframes + status.response.frames_rejected < kFrames) &&
+         std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
   ASSERT_EQ(status.response.frames_received, kFrames) << node->Log();
