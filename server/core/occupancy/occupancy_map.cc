@@ -192,22 +192,28 @@ bool OccupancyMap::WriteBinary(const std::string& path, std::string* why) const 
 }
 
 bool OccupancyMap::ReadBinary(const std::string& bytes, std::string* why) {
-  // Read aside first: readBinary takes the file's resolution, and a refused file must leave the
-  // map as it was.
-  octomap::OcTree probe(impl_->config.resolution_m);
-  std::istringstream probe_stream(bytes);
-  if (!probe.readBinary(probe_stream)) {
+  // Read aside, once: readBinary takes the file's resolution, and a refused file must leave the
+  // map as it was. The aside tree gets this map's clamping, which turns the file's occupied and
+  // free bits into log-odds; an accepted file's nodes then change places with the map's.
+  octomap::OcTree read(impl_->config.resolution_m);
+  read.setClampingThresMin(impl_->tree.getClampingThresMin());
+  read.setClampingThresMax(impl_->tree.getClampingThresMax());
+  read.setOccupancyThres(impl_->tree.getOccupancyThres());
+  read.setProbHit(impl_->tree.getProbHit());
+  read.setProbMiss(impl_->tree.getProbMiss());
+  std::istringstream stream(bytes);
+  if (!read.readBinary(stream)) {
     *why = "not an OctoMap binary (.bt) file";
     return false;
   }
-  if (std::abs(probe.getResolution() - impl_->config.resolution_m) > 1e-9) {
-    *why = "the OctoMap's resolution is " + std::to_string(probe.getResolution()) +
+  if (std::abs(read.getResolution() - impl_->config.resolution_m) > 1e-9) {
+    *why = "the OctoMap's resolution is " + std::to_string(read.getResolution()) +
            " m, this map's " + std::to_string(impl_->config.resolution_m) + " m";
     return false;
   }
-  std::istringstream stream(bytes);
-  impl_->tree.clear();
-  return impl_->tree.readBinary(stream);
+  impl_->tree.clear();  // also marks the cached bounds stale
+  impl_->tree.swapContent(read);
+  return true;
 }
 
 std::vector<Eigen::Vector3d> OccupancyMap::OccupiedVoxelCenters() const {

@@ -1,12 +1,11 @@
 #include "render/map_scene_io.h"
 
-#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <octomap/OcTree.h>
 #include <sstream>
 
+#include "occupancy/occupancy_map.h"
 #include "pointcloud_io/pointcloud_io.h"
 #include "types/coco_classes.h"
 
@@ -25,9 +24,10 @@ bool ReadFile(const std::string& path, std::string* bytes, std::string* why) {
   return true;
 }
 
-// The header of an OctoMap binary file: "id OcTree", "size N" (nodes), "res R" (metres), then
-// "data". False when a line is missing or malformed.
-bool ReadHeader(const std::string& bytes, std::size_t* nodes, double* resolution_m) {
+// The resolution in the header of an OctoMap binary file: "id OcTree", "size N" (nodes), "res R"
+// (metres), then "data". False when a line is missing or malformed (OctoMap itself reads a
+// header without "size" as an empty tree).
+bool ReadResolution(const std::string& bytes, double* resolution_m) {
   std::istringstream header(bytes.substr(0, 1024));
   std::string line;
   bool id = false, size = false, resolution = false;
@@ -35,7 +35,7 @@ bool ReadHeader(const std::string& bytes, std::size_t* nodes, double* resolution
     try {
       if (line == "id OcTree") id = true;
       if (line.rfind("size ", 0) == 0) {
-        *nodes = std::stoul(line.substr(5));
+        (void)std::stoul(line.substr(5));
         size = true;
       }
       if (line.rfind("res ", 0) == 0) {
@@ -58,36 +58,22 @@ bool ReadMapScene(const std::string& dir, PictureScene* scene, std::string* why)
   const std::string map_path = (fs::path(dir) / "map.bt").string();
   std::string bytes;
   if (!ReadFile(map_path, &bytes, why)) return false;
-  std::size_t nodes = 0;
   double resolution_m = 0.0;
-  if (!ReadHeader(bytes, &nodes, &resolution_m)) {
+  if (!ReadResolution(bytes, &resolution_m)) {
     *why = map_path + ": not an OctoMap binary file (its header needs id OcTree, size, res, data)";
     return false;
   }
-  // Stock OctoMap reads the file once (it checks the node count against the header); pruned
-  // occupied nodes are expanded to voxels of the map's resolution.
-  octomap::OcTree tree(resolution_m);
-  std::istringstream stream(bytes);
-  if (!tree.readBinary(stream) || tree.size() != nodes) {
-    *why = map_path + ": its data is cut short or corrupt (" + std::to_string(tree.size()) +
-           " nodes read, " + std::to_string(nodes) + " in its header)";
+  OccupancyConfig occupancy_config;
+  occupancy_config.resolution_m = resolution_m;
+  OccupancyMap occupancy(occupancy_config);
+  if (!occupancy.ReadBinary(bytes, why)) {
+    *why = map_path + ": " + *why;
     return false;
   }
   scene->structure_voxel_m = static_cast<float>(resolution_m);
-  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-    if (!tree.isNodeOccupied(*it)) continue;
-    const int per_side = static_cast<int>(std::lround(it.getSize() / resolution_m));
-    const Eigen::Vector3f corner =
-        Eigen::Vector3f(it.getX(), it.getY(), it.getZ()) - Eigen::Vector3f::Constant(static_cast<float>(it.getSize() / 2));
-    const float leaf = static_cast<float>(resolution_m);
-    for (int x = 0; x < per_side; ++x) {
-      for (int y = 0; y < per_side; ++y) {
-        for (int z = 0; z < per_side; ++z) {
-          scene->structure_W.push_back(corner + leaf * Eigen::Vector3f(x + 0.5f, y + 0.5f, z + 0.5f));
-        }
-      }
-    }
-  }
+  const std::vector<Eigen::Vector3d> centres = occupancy.OccupiedVoxelCenters();
+  scene->structure_W.reserve(centres.size());
+  for (const Eigen::Vector3d& centre : centres) scene->structure_W.push_back(centre.cast<float>());
 
   const std::string json_path = (fs::path(dir) / "objects.json").string();
   if (!fs::exists(json_path)) return true;
