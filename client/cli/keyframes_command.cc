@@ -8,6 +8,7 @@
 
 #include "commands.h"
 #include "objmap/conversions.h"
+#include "poses_file.h"
 #include "server_common.h"
 
 namespace objmap::cli {
@@ -27,14 +28,15 @@ constexpr char kCommand[] = "keyframes";
 void WriteKeyframes(const v1::ListKeyframesResponse& response, std::ostream& out) {
   out << "# keyframe_id tx ty tz qx qy qz qw (T_W_C, camera to world), map version "
       << response.map_version() << "\n";
-  char line[512];
+  char stamp[32];
   for (const v1::KeyframeInfo& keyframe : response.keyframes()) {
     const v1::Pose& pose = keyframe.t_w_c();
-    std::snprintf(line, sizeof(line), "%lld %.9g %.9g %.9g %.9g %.9g %.9g %.9g  # %s %.6f\n",
-                  static_cast<long long>(keyframe.id()), pose.translation().x(),
-                  pose.translation().y(), pose.translation().z(), pose.qx(), pose.qy(), pose.qz(),
-                  pose.qw(), keyframe.name().c_str(), keyframe.stamp());
-    out << line;
+    std::snprintf(stamp, sizeof(stamp), "%.6f", keyframe.stamp());
+    out << FormatPoseLine(
+        keyframe.id(),
+        Eigen::Vector3d(pose.translation().x(), pose.translation().y(), pose.translation().z()),
+        Eigen::Quaterniond(pose.qw(), pose.qx(), pose.qy(), pose.qz()),
+        keyframe.name() + " " + stamp);
   }
 }
 

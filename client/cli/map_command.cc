@@ -214,16 +214,12 @@ bool WriteKeyframePoses(const SequenceRunReport& report, const Mapper& mapper,
                         const std::string& path, std::string* why) {
   std::ofstream out(path);
   out << "# keyframe_id tx ty tz qx qy qz qw (T_W_C, camera to world)  # frame index\n";
-  char line[256];
   for (const KeyframeReport& keyframe : report.keyframes) {
     const KeyframeRecord* record = mapper.FindKeyframe(keyframe.result.keyframe_id);
     if (record == nullptr) continue;
-    const Eigen::Quaterniond q(record->T_W_C.rotation());
-    const Eigen::Vector3d& t = record->T_W_C.translation();
-    std::snprintf(line, sizeof(line), "%lld %.9g %.9g %.9g %.9g %.9g %.9g %.9g  # frame %zu\n",
-                  static_cast<long long>(keyframe.result.keyframe_id), t.x(), t.y(), t.z(), q.x(),
-                  q.y(), q.z(), q.w(), keyframe.frame_index);
-    out << line;
+    out << FormatPoseLine(keyframe.result.keyframe_id, record->T_W_C.translation(),
+                          Eigen::Quaterniond(record->T_W_C.rotation()),
+                          "frame " + std::to_string(keyframe.frame_index));
   }
   if (!out) {
     *why = path + ": write failed";

@@ -1,6 +1,7 @@
 #include "poses_file.h"
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -103,6 +104,15 @@ bool ReadPosesFile(const std::string& path, std::vector<KeyframePoseLine>* poses
     return false;
   }
   return true;
+}
+
+std::string FormatPoseLine(KeyframeId keyframe_id, const Eigen::Vector3d& t,
+                           const Eigen::Quaterniond& q, const std::string& comment) {
+  char line[256];
+  std::snprintf(line, sizeof(line), "%lld %.9g %.9g %.9g %.9g %.9g %.9g %.9g",
+                static_cast<long long>(keyframe_id), t.x(), t.y(), t.z(), q.x(), q.y(), q.z(),
+                q.w());
+  return std::string(line) + (comment.empty() ? "" : "  # " + comment) + "\n";
 }
 
 }  // namespace objmap::cli

@@ -23,6 +23,11 @@ struct KeyframePoseLine {
 [[nodiscard]] bool ParsePosesText(const std::string& text, std::vector<KeyframePoseLine>* poses,
                                   std::string* why);
 
+/// One line of a poses file, `keyframe_id tx ty tz qx qy qz qw  # comment\n` (9 significant
+/// digits; the quaternion as given), the comment left out when empty.
+[[nodiscard]] std::string FormatPoseLine(KeyframeId keyframe_id, const Eigen::Vector3d& t,
+                                         const Eigen::Quaterniond& q, const std::string& comment);
+
 /// Reads and parses a poses file; the reason on failure starts with the path.
 [[nodiscard]] bool ReadPosesFile(const std::string& path, std::vector<KeyframePoseLine>* poses,
                                  std::string* why);
