@@ -1,6 +1,7 @@
 # `cmake --install build --prefix P`: a working objmap under any prefix.
 #   P/bin/                 objmap, objmap_server, objmap_node and objmap_dataset_player (those built)
-#   P/share/objmap/        models/centernet_coco.pb, objmap.example.yaml, launch/*.launch
+#   P/share/objmap/        models/centernet_coco.pb, objmap.example.yaml, launch/*.launch,
+#                          viewer/ (the web viewer's page and three.js)
 #   P/lib/objmap/          links to the ROS executables, where rosrun and roslaunch look
 #   P/share/objmap/launch/objmap.rviz, and with ROS: P/share/objmap_msgs (msg, srv), P/include/
 #   objmap_msgs, P/lib/python3/dist-packages/objmap_msgs and P/setup.bash, which puts them all
@@ -37,6 +38,23 @@ if(NOT EXISTS ${OBJMAP_MODEL_FILE})
     "the install will not have the detector model")
 endif()
 install(FILES ${OBJMAP_MODEL_FILE} DESTINATION ${OBJMAP_INSTALL_SHARE_DIR}/models OPTIONAL)
+
+# The web viewer's page, and three.js as scripts/setup.sh installs it from npm (the same layout as
+# the source folder, so that the page's import map holds for both).
+set(_objmap_web ${PROJECT_SOURCE_DIR}/server/http_viewer/web)
+install(FILES ${_objmap_web}/index.html ${_objmap_web}/viewer.js ${_objmap_web}/viewer.css
+  DESTINATION ${OBJMAP_INSTALL_SHARE_DIR}/viewer)
+if(NOT EXISTS ${_objmap_web}/node_modules/three/build/three.module.js)
+  message(STATUS "objmap: three.js is absent from ${_objmap_web}/node_modules (scripts/setup.sh "
+    "installs it); the install's viewer will not start")
+endif()
+install(FILES ${_objmap_web}/node_modules/three/build/three.module.js
+  ${_objmap_web}/node_modules/three/build/three.core.js
+  DESTINATION ${OBJMAP_INSTALL_SHARE_DIR}/viewer/node_modules/three/build OPTIONAL)
+install(FILES ${_objmap_web}/node_modules/three/LICENSE
+  DESTINATION ${OBJMAP_INSTALL_SHARE_DIR}/viewer/node_modules/three OPTIONAL)
+install(FILES ${_objmap_web}/node_modules/three/examples/jsm/controls/OrbitControls.js
+  DESTINATION ${OBJMAP_INSTALL_SHARE_DIR}/viewer/node_modules/three/examples/jsm/controls OPTIONAL)
 
 set(OBJMAP_EXAMPLE_CONFIG ${PROJECT_SOURCE_DIR}/server/core/config/objmap.example.yaml)
 install(FILES ${OBJMAP_EXAMPLE_CONFIG} DESTINATION ${OBJMAP_INSTALL_SHARE_DIR})

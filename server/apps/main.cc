@@ -10,6 +10,7 @@
 #include "detection/model_location.h"
 #include "grpc_service/grpc_server.h"
 #include "grpc_service/map_service.h"
+#include "http_viewer/http_viewer.h"
 #include "map_server/map_server.h"
 #include "server_options.h"
 
@@ -88,6 +89,30 @@ void PrintListening(const ServerOptions& options, int port, const MapServer& map
   std::fflush(stdout);
 }
 
+// The web viewer on --http, or nullptr after printing why not.
+std::unique_ptr<http_viewer::HttpViewer> StartViewer(const ServerOptions& options,
+                                                     const http_viewer::ViewerMap& map) {
+  http_viewer::HttpViewerConfig config;
+  config.listen_address = options.http_address;
+  std::string why;
+  if (!http_viewer::FindViewerFolder(options.viewer_folder, &config.viewer_folder, &why)) {
+    std::cerr << "objmap_server: --http: " << why << "\n";
+    return nullptr;
+  }
+  std::unique_ptr<http_viewer::HttpViewer> viewer = http_viewer::HttpViewer::Start(config, map, &why);
+  if (!viewer) {
+    std::cerr << "objmap_server: --http: " << why << "\n";
+    return nullptr;
+  }
+  if (!options.grpc.tokens_path.empty()) {
+    std::cerr << "objmap_server: warning: the viewer at " << viewer->url()
+              << " answers without tokens: whoever reaches it reads the map\n";
+  }
+  std::printf("objmap_server viewer at %s\n", viewer->url().c_str());
+  std::fflush(stdout);
+  return viewer;
+}
+
 int Serve(const ServerOptions& options, const ObjmapConfig& config) {
   const sigset_t signals = StopSignals();
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
@@ -117,6 +142,18 @@ int Serve(const ServerOptions& options, const ObjmapConfig& config) {
     std::cerr << "objmap_server: " << why << "\n";
     return 1;
   }
+  // The viewer, when asked for; its line comes before the 'listening' line that scripts wait for.
+  std::unique_ptr<http_viewer::LiveViewerMap> viewer_map;
+  std::unique_ptr<http_viewer::HttpViewer> viewer;
+  if (!options.http_address.empty()) {
+    viewer_map = std::make_unique<http_viewer::LiveViewerMap>(*map_server,
+                                                              "objmap_server " + options.db_path);
+    viewer = StartViewer(options, *viewer_map);
+    if (!viewer) {
+      server->Shutdown();
+      return 1;
+    }
+  }
   PrintListening(options, port, *map_server);
 
   const int signal = WaitForStopSignal(signals);
@@ -125,6 +162,7 @@ int Serve(const ServerOptions& options, const ObjmapConfig& config) {
   // New writes are refused first (UNAVAILABLE) and watchers end; then gRPC lets running calls
   // finish; then the MapServer destructor applies what is still queued.
   map_server->Shutdown();
+  if (viewer) viewer->Stop();
   server->Shutdown(std::chrono::system_clock::now() + kShutdownGrace);
   server->Wait();
   map_server.reset();

@@ -3,6 +3,8 @@
 #include <cstdlib>
 #include <vector>
 
+#include "http_viewer/http_viewer.h"
+
 namespace objmap {
 namespace {
 
@@ -44,6 +46,10 @@ bool SetValue(const std::string& flag, const std::string& value, ServerOptions* 
     options->grpc.tls_client_ca_path = value;
   } else if (flag == "--tokens") {
     options->grpc.tokens_path = value;
+  } else if (flag == "--http") {
+    options->http_address = value;
+  } else if (flag == "--viewer-dir") {
+    options->viewer_folder = value;
   } else {
     *why = "unknown option " + flag;
     return false;
@@ -97,6 +103,21 @@ bool ParseServerOptions(int argc, const char* const* argv, ServerOptions* option
            invalid;
     return false;
   }
+  if (!options->http_address.empty()) {
+    std::string host;
+    int port = 0;
+    if (!http_viewer::ParseListenAddress(options->http_address, &host, &port, &invalid)) {
+      *why = "--http: " + invalid;
+      return false;
+    }
+    // The viewer has no authentication: reachable from other machines only when asked twice.
+    if (!http_viewer::IsLoopbackHost(host) && !options->grpc.insecure) {
+      *why = "--http " + options->http_address +
+             ": the viewer has no authentication and would show the map to anyone who reaches "
+             "it; serve it on loopback (127.0.0.1:PORT, then an SSH tunnel) or add --insecure";
+      return false;
+    }
+  }
   return true;
 }
 
@@ -125,7 +146,15 @@ const char* ServerUsage() {
          "                        (queries) or 'write TOKEN' (also AddKeyframe, IngestKeyframes,\n"
          "                        UpdatePoses)\n"
          "  --insecure            serve an address other machines reach (0.0.0.0:50051) without\n"
-         "                        TLS and tokens; refused otherwise\n"
+         "                        TLS and tokens, or the viewer on one; refused otherwise\n"
+         "  --http HOST:PORT      also serve the web viewer (the map in 3D, the inventory,\n"
+         "                        keyframe crops, IsFree) at http://HOST:PORT/; PORT alone is\n"
+         "                        127.0.0.1:PORT, port 0 picks a free one (printed on the\n"
+         "                        'viewer at' line); off by default; read-only, no tokens, so\n"
+         "                        an address other machines reach also needs --insecure\n"
+         "  --viewer-dir DIR      the viewer's page and three.js (default: PREFIX/share/objmap/\n"
+         "                        viewer, $OBJMAP_VIEWER_DIR, the source tree's\n"
+         "                        server/http_viewer/web for a build-tree run)\n"
          "  --print-config        print the effective configuration as YAML and exit\n"
          "  --version             print the version and the build's options and exit\n"
          "Stops cleanly on SIGINT or SIGTERM: acknowledged keyframes are always durable.\n";

@@ -19,6 +19,9 @@ struct ServerOptions {
   bool version = false;       ///< --version
   /// --listen, --max-message-mb, --tls-cert, --tls-key, --tls-client-ca, --tokens, --insecure
   grpc_service::GrpcServerOptions grpc;
+  /// --http HOST:PORT (or PORT: loopback): the web viewer's address; empty: no viewer.
+  std::string http_address;
+  std::string viewer_folder;  ///< --viewer-dir, empty: found as FindViewerFolder says
 };
 
 /// Parses argv (flags as "--flag value" or "--flag=value"). False with a reason naming the flag.

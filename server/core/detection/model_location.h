@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "types/install_location.h"
+
 namespace objmap {
 
 /// The file name of the converted CenterNet model (scripts/fetch_model.sh writes it).
@@ -12,11 +14,7 @@ inline constexpr char kDetectorModelFile[] = "centernet_coco.pb";
 /// The environment variable naming a model file.
 inline constexpr char kDetectorModelEnv[] = "OBJMAP_MODEL";
 
-/// One place looked at, in order, and why it is there.
-struct ModelCandidate {
-  std::string path;    ///< empty when the place does not apply (the variable is not set)
-  std::string origin;  ///< "next to the executable", "$OBJMAP_MODEL", "the source tree"
-};
+using ModelCandidate = DataCandidate;
 
 /// The places searched when no model path is configured, in order:
 ///   1. PREFIX/share/objmap/models/centernet_coco.pb, PREFIX being the executable's folder's

@@ -102,6 +102,10 @@ MapServer::MapServer() : impl_(std::make_unique<Impl>()) {}
 
 const RequestLimits& MapServer::limits() const { return impl_->config.limits; }
 
+double MapServer::occupancy_resolution_m() const {
+  return impl_->config.mapper.occupancy.resolution_m;
+}
+
 MapServer::~MapServer() {
   Shutdown();
   if (impl_->worker.joinable()) impl_->worker.join();
@@ -408,6 +412,20 @@ ServiceStatus MapServer::NewestKeyframe(RgbdFrame* frame) const {
   frame->depth.height = stored.intrinsics.height;
   frame->depth.depth_m.reserve(stored.depth_mm.size());
   for (const std::uint16_t mm : stored.depth_mm) frame->depth.depth_m.push_back(mm * 0.001f);
+  return ServiceStatus::Ok();
+}
+
+ServiceStatus MapServer::KeyframeColor(KeyframeId id, ColorImage* color) const {
+  {
+    std::lock_guard<std::mutex> lock(impl_->known_mutex);
+    if (impl_->known_keyframes.count(id) == 0) {
+      return ServiceStatus::NotFound("keyframe " + std::to_string(id) + " is not in the map");
+    }
+  }
+  StoredKeyframe stored;
+  std::string why;
+  if (!impl_->store->LoadKeyframe(id, &stored, &why)) return {StatusCode::kInternal, why};
+  *color = std::move(stored.color);
   return ServiceStatus::Ok();
 }
 

@@ -91,6 +91,14 @@ struct MapServerConfig {
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
 
+/// One detection that joined an object: where, in which keyframe's colour image, and as what.
+struct ObjectSighting {
+  KeyframeId keyframe_id = 0;
+  BoundingBox2D box;    ///< colour pixels
+  int class_id = -1;    ///< the observation's best class (kUnknownClassId: no detection named it)
+  float score = 0.f;
+};
+
 /// An immutable view of one object, shared between snapshots while the object does not change.
 struct ObjectView {
   ObjectId id = 0;
@@ -102,6 +110,7 @@ struct ObjectView {
   int observations = 0;
   std::vector<KeyframeId> keyframes;
   std::vector<std::pair<int, float>> scores;  ///< non-zero accumulated class scores, best first
+  std::vector<ObjectSighting> sightings;      ///< one per observation, in keyframe order
   bool confirmed = false;                     ///< passes the inventory thresholds
   std::uint64_t changed_version = 0;          ///< map version of the last change
   std::shared_ptr<const ColoredPoints> model_W;  ///< the 5 mm model, world frame
@@ -270,6 +279,9 @@ class MapServer {
                                       const Eigen::Vector3d& direction_W, double max_range_m,
                                       bool unknown_stops, RayHit* hit, ObjectId* object_hit,
                                       std::uint64_t* version) const;
+  /// The colour image stored with keyframe `id` (JPEG-decoded; empty when it came without one);
+  /// kNotFound for an id the map does not hold.
+  [[nodiscard]] ServiceStatus KeyframeColor(KeyframeId id, ColorImage* color) const;
   /// The OctoMap (or the part in the box) as standard .bt bytes.
   [[nodiscard]] ServiceStatus OctomapBytes(const std::optional<std::pair<Eigen::Vector3d,
                                                                          Eigen::Vector3d>>& region,
@@ -292,6 +304,8 @@ class MapServer {
   [[nodiscard]] ServerStatus Status() const;
   /// The limits on one request this server was opened with.
   [[nodiscard]] const RequestLimits& limits() const;
+  /// The OctoMap's voxel size, metres.
+  [[nodiscard]] double occupancy_resolution_m() const;
 
   /// Changes with version > `since_version`, oldest first. Waits up to `timeout` when there are
   /// none yet; returns empty on timeout or shutdown. When `since_version` is older than the
@@ -309,6 +323,15 @@ class MapServer {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+/// The objects of `snapshot` with at least one model point inside [min_W, max_W], ascending id:
+/// what keeps a box from being free besides the OctoMap (objects are not in it).
+[[nodiscard]] std::vector<ObjectId> ObjectsInBox(const MapSnapshot& snapshot,
+                                                 const Eigen::Vector3d& min_W,
+                                                 const Eigen::Vector3d& max_W);
+
+/// Evenly thins `points` to at most `max_count` (every k-th), keeping their order.
+void ThinEvenly(std::size_t max_count, std::vector<Eigen::Vector3d>* points);
 
 /// Checks a box: finite coordinates and min <= max on every axis; `field` names it in the reason.
 [[nodiscard]] bool ValidateBox(const Eigen::Vector3d& min_W, const Eigen::Vector3d& max_W,

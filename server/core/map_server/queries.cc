@@ -190,6 +190,20 @@ ServiceStatus MapServer::Impl::ReadRegion(const Eigen::Vector3d& min_W,
   return ServiceStatus::Ok();
 }
 
+std::vector<ObjectId> ObjectsInBox(const MapSnapshot& snapshot, const Eigen::Vector3d& min_W,
+                                   const Eigen::Vector3d& max_W) {
+  std::vector<ObjectId> inside;
+  for (const auto& [id, view] : snapshot.objects) {
+    if (!BoxesOverlap(view->min_W, view->max_W, min_W, max_W) || !view->model_W) continue;
+    const auto& points = view->model_W->points;
+    if (std::any_of(points.begin(), points.end(),
+                    [&](const Eigen::Vector3f& p) { return InBox(p, min_W, max_W); })) {
+      inside.push_back(id);
+    }
+  }
+  return inside;
+}
+
 ServiceStatus MapServer::IsFree(const Eigen::Vector3d& min_W, const Eigen::Vector3d& max_W,
                                 bool unknown_is_free, bool* free, RegionOccupancy* counts,
                                 std::vector<ObjectId>* objects_inside,
@@ -199,15 +213,7 @@ ServiceStatus MapServer::IsFree(const Eigen::Vector3d& min_W, const Eigen::Vecto
   const std::shared_ptr<const MapSnapshot> snapshot = impl_->Current();
   ServiceStatus status = impl_->ReadRegion(min_W, max_W, 0.0, false, 0, counts, version);
   if (!status.ok()) return status;
-  std::vector<ObjectId> inside;
-  for (const auto& [id, view] : snapshot->objects) {
-    if (!BoxesOverlap(view->min_W, view->max_W, min_W, max_W) || !view->model_W) continue;
-    const auto& points = view->model_W->points;
-    if (std::any_of(points.begin(), points.end(),
-                    [&](const Eigen::Vector3f& p) { return InBox(p, min_W, max_W); })) {
-      inside.push_back(id);
-    }
-  }
+  std::vector<ObjectId> inside = ObjectsInBox(*snapshot, min_W, max_W);
   *free = counts->occupied == 0 && inside.empty() && (unknown_is_free || counts->unknown == 0);
   if (objects_inside != nullptr) *objects_inside = std::move(inside);
   return status;
@@ -305,13 +311,16 @@ ServiceStatus MapServer::OccupiedCenters(std::size_t max_count,
   *version = impl_->Current()->version;
   impl_->mapper->ReadOccupancy(
       [&](const OccupancyMap& map) { *centers = map.OccupiedVoxelCenters(); });
-  if (centers->size() > max_count) {
-    const std::size_t stride = (centers->size() + max_count - 1) / max_count;
-    std::size_t kept = 0;
-    for (std::size_t i = 0; i < centers->size(); i += stride) (*centers)[kept++] = (*centers)[i];
-    centers->resize(kept);
-  }
+  ThinEvenly(max_count, centers);
   return ServiceStatus::Ok();
+}
+
+void ThinEvenly(std::size_t max_count, std::vector<Eigen::Vector3d>* points) {
+  if (max_count == 0 || points->size() <= max_count) return;
+  const std::size_t stride = (points->size() + max_count - 1) / max_count;
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < points->size(); i += stride) (*points)[kept++] = (*points)[i];
+  points->resize(kept);
 }
 
 ServiceStatus MapServer::ListKeyframes(KeyframeId first_id, std::size_t max_count,

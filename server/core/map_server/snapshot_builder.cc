@@ -23,6 +23,22 @@ std::shared_ptr<const ObjectView> SnapshotBuilder::MakeView(
   }
   std::sort(view->scores.begin(), view->scores.end(),
             [](const auto& a, const auto& b) { return a.second > b.second; });
+  for (const ObjectObservation& observation : object.observations) {
+    ObjectSighting sighting;
+    sighting.keyframe_id = observation.keyframe_id;
+    sighting.box = observation.box;
+    for (const auto& [class_id, score] : observation.class_scores) {
+      if (sighting.class_id < 0 || score > sighting.score) {
+        sighting.class_id = class_id;
+        sighting.score = score;
+      }
+    }
+    view->sightings.push_back(sighting);
+  }
+  std::stable_sort(view->sightings.begin(), view->sightings.end(),
+                   [](const ObjectSighting& a, const ObjectSighting& b) {
+                     return a.keyframe_id < b.keyframe_id;
+                   });
   view->confirmed = confirmed;
   view->changed_version = version;
   // The model is the expensive part: shared with the previous view when the object's published

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <fstream>
 #include <sstream>
 #include <utility>
 
@@ -240,5 +241,57 @@ void OccupancyMap::Clear() { impl_->tree.clear(); }
 std::size_t OccupancyMap::MemoryBytes() const { return impl_->tree.memoryUsage(); }
 
 const OccupancyConfig& OccupancyMap::config() const { return impl_->config; }
+
+namespace {
+
+// The resolution in the header of an OctoMap binary file: "id OcTree", "size N" (nodes), "res R"
+// (metres), then "data". False when a line is missing or malformed (OctoMap itself reads a
+// header without "size" as an empty tree).
+bool ReadOctomapResolution(const std::string& bytes, double* resolution_m) {
+  std::istringstream header(bytes.substr(0, 1024));
+  std::string line;
+  bool id = false, size = false, resolution = false;
+  while (std::getline(header, line)) {
+    try {
+      if (line == "id OcTree") id = true;
+      if (line.rfind("size ", 0) == 0) {
+        (void)std::stoul(line.substr(5));
+        size = true;
+      }
+      if (line.rfind("res ", 0) == 0) {
+        *resolution_m = std::stod(line.substr(4));
+        resolution = *resolution_m > 0.0 && *resolution_m < 10.0;
+      }
+    } catch (const std::exception&) {
+      return false;
+    }
+    if (line == "data") return id && size && resolution;
+  }
+  return false;
+}
+
+}  // namespace
+
+std::unique_ptr<OccupancyMap> ReadOctomapFile(const std::string& path, OccupancyConfig config,
+                                              std::string* why) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) {
+    *why = path + ": cannot open";
+    return nullptr;
+  }
+  std::ostringstream content;
+  content << file.rdbuf();
+  const std::string bytes = content.str();
+  if (!ReadOctomapResolution(bytes, &config.resolution_m)) {
+    *why = path + ": not an OctoMap binary file (its header needs id OcTree, size, res, data)";
+    return nullptr;
+  }
+  auto map = std::make_unique<OccupancyMap>(config);
+  if (!map->ReadBinary(bytes, why)) {
+    *why = path + ": " + *why;
+    return nullptr;
+  }
+  return map;
+}
 
 }  // namespace objmap

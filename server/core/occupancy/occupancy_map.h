@@ -239,4 +239,12 @@ class OccupancyMap {
   std::unique_ptr<Impl> impl_;
 };
 
+/// A map read from an OctoMap binary file (.bt) at the file's own resolution (other settings:
+/// `config`'s). nullptr with a reason naming the file when it cannot be read, or when its header
+/// lacks a line of id OcTree, size, res and data (OctoMap itself reads a header without "size"
+/// as an empty tree).
+[[nodiscard]] std::unique_ptr<OccupancyMap> ReadOctomapFile(const std::string& path,
+                                                            OccupancyConfig config,
+                                                            std::string* why);
+
 }  // namespace objmap

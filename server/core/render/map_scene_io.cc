@@ -24,54 +24,18 @@ bool ReadFile(const std::string& path, std::string* bytes, std::string* why) {
   return true;
 }
 
-// The resolution in the header of an OctoMap binary file: "id OcTree", "size N" (nodes), "res R"
-// (metres), then "data". False when a line is missing or malformed (OctoMap itself reads a
-// header without "size" as an empty tree).
-bool ReadResolution(const std::string& bytes, double* resolution_m) {
-  std::istringstream header(bytes.substr(0, 1024));
-  std::string line;
-  bool id = false, size = false, resolution = false;
-  while (std::getline(header, line)) {
-    try {
-      if (line == "id OcTree") id = true;
-      if (line.rfind("size ", 0) == 0) {
-        (void)std::stoul(line.substr(5));
-        size = true;
-      }
-      if (line.rfind("res ", 0) == 0) {
-        *resolution_m = std::stod(line.substr(4));
-        resolution = *resolution_m > 0.0 && *resolution_m < 10.0;
-      }
-    } catch (const std::exception&) {
-      return false;
-    }
-    if (line == "data") return id && size && resolution;
-  }
-  return false;
-}
-
 }  // namespace
 
 bool ReadMapScene(const std::string& dir, PictureScene* scene, std::string* why) {
   namespace fs = std::filesystem;
   *scene = PictureScene();
-  const std::string map_path = (fs::path(dir) / "map.bt").string();
+  const std::unique_ptr<OccupancyMap> occupancy =
+      ReadOctomapFile((fs::path(dir) / "map.bt").string(), OccupancyConfig(), why);
+  if (!occupancy) return false;
+  const double resolution_m = occupancy->config().resolution_m;
   std::string bytes;
-  if (!ReadFile(map_path, &bytes, why)) return false;
-  double resolution_m = 0.0;
-  if (!ReadResolution(bytes, &resolution_m)) {
-    *why = map_path + ": not an OctoMap binary file (its header needs id OcTree, size, res, data)";
-    return false;
-  }
-  OccupancyConfig occupancy_config;
-  occupancy_config.resolution_m = resolution_m;
-  OccupancyMap occupancy(occupancy_config);
-  if (!occupancy.ReadBinary(bytes, why)) {
-    *why = map_path + ": " + *why;
-    return false;
-  }
   scene->structure_voxel_m = static_cast<float>(resolution_m);
-  const std::vector<Eigen::Vector3d> centres = occupancy.OccupiedVoxelCenters();
+  const std::vector<Eigen::Vector3d> centres = occupancy->OccupiedVoxelCenters();
   scene->structure_W.reserve(centres.size());
   for (const Eigen::Vector3d& centre : centres) scene->structure_W.push_back(centre.cast<float>());
 
