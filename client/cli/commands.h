@@ -18,6 +18,9 @@ int RunEvalTrajectoryCommand(int argc, char** argv);
 /// `objmap render <map-dir> --out FILE.png`: a picture of a map folder.
 int RunRenderCommand(int argc, char** argv);
 
+/// `objmap view <map-dir>`: the web viewer on a map folder, until Ctrl-C.
+int RunViewCommand(int argc, char** argv);
+
 // Commands that talk to a running objmap_server (built with OBJMAP_WITH_GRPC).
 
 /// `objmap ingest <dataset>`: streams the keyframes of a recorded sequence to the server.

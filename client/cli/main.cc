@@ -22,6 +22,7 @@ void PrintUsage(std::ostream& out) {
          "  objmap eval-trajectory <estimated.txt> <reference.txt>\n"
          "                                               score a camera trajectory (ATE, RPE)\n"
          "  objmap render <map-dir> --out FILE.png       a picture of a map (headless)\n"
+         "  objmap view <map-dir>                        the map in the browser (prints the URL)\n"
 #ifdef OBJMAP_CLI_WITH_SERVER
          "commands for a running objmap_server (--server ADDR, default 127.0.0.1:50051):\n"
          "  objmap ingest <dataset>                      stream a sequence's keyframes\n"
@@ -44,6 +45,7 @@ const std::map<std::string, Command>& Commands() {
       {"eval", objmap::cli::RunEvalCommand},
       {"eval-trajectory", objmap::cli::RunEvalTrajectoryCommand},
       {"render", objmap::cli::RunRenderCommand},
+      {"view", objmap::cli::RunViewCommand},
 #ifdef OBJMAP_CLI_WITH_SERVER
       {"ingest", objmap::cli::RunIngestCommand},
       {"inventory", objmap::cli::RunInventoryCommand},

@@ -10,6 +10,8 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <set>
 
 #include "arguments.h"
@@ -42,6 +44,7 @@ constexpr char kMapUsage[] =
     "                            camera info paired by stamp, poses from /tf + /tf_static at\n"
     "                            each colour stamp; topics left unset are auto-detected\n"
     "  --out DIR                 output folder: map.bt, objects.json, objects/*.ply, timings.csv\n"
+    "                            keyframes.txt, keyframes/<id>.jpg (what `objmap view` shows)\n"
     "  --config FILE             objmap's configuration file, the same as objmap_server --config\n"
     "                            and objmap_node's parameters (every key with its default:\n"
     "                            PREFIX/share/objmap/objmap.example.yaml); the flags below win\n"
@@ -125,15 +128,53 @@ class RecordingDetector : public Detector {
               std::string* why) override {
     if (!inner_->Detect(frame, detections, why)) return false;
     recorded_[frame.name] = *detections;
+    // The detector sees every keyframe's colour image, and only those: kept as JPEG (about
+    // 50 kB each) for the map folder's keyframes/, which the viewer crops detections from.
+    if (!frame.color.empty()) {
+      const cv::Mat rgb(frame.color.height, frame.color.width, CV_8UC3,
+                        const_cast<std::uint8_t*>(frame.color.rgb.data()));
+      cv::Mat bgr;
+      cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
+      std::vector<std::uint8_t>& jpeg = keyframe_jpegs_[frame.frame_index];
+      if (!cv::imencode(".jpg", bgr, jpeg, {cv::IMWRITE_JPEG_QUALITY, 85})) {
+        keyframe_jpegs_.erase(frame.frame_index);
+      }
+    }
     return true;
   }
   std::string Name() const override { return inner_->Name(); }
   const DetectionsByFrame& recorded() const { return recorded_; }
+  /// Frame index -> the JPEG of its colour image.
+  const std::map<std::int64_t, std::vector<std::uint8_t>>& keyframe_jpegs() const {
+    return keyframe_jpegs_;
+  }
 
  private:
   std::unique_ptr<Detector> inner_;
   DetectionsByFrame recorded_;
+  std::map<std::int64_t, std::vector<std::uint8_t>> keyframe_jpegs_;
 };
+
+// keyframes/<keyframe id>.jpg: the colour image of each mapped keyframe.
+bool WriteKeyframeImages(const SequenceRunReport& report,
+                         const std::map<std::int64_t, std::vector<std::uint8_t>>& jpegs,
+                         const std::string& dir, std::string* why) {
+  std::error_code error;
+  std::filesystem::create_directories(dir, error);
+  for (const KeyframeReport& keyframe : report.keyframes) {
+    const auto it = jpegs.find(static_cast<std::int64_t>(keyframe.frame_index));
+    if (it == jpegs.end()) continue;
+    const std::string path = dir + "/" + std::to_string(keyframe.result.keyframe_id) + ".jpg";
+    std::ofstream out(path, std::ios::binary);
+    out.write(reinterpret_cast<const char*>(it->second.data()),
+              static_cast<std::streamsize>(it->second.size()));
+    if (!out) {
+      *why = path + ": write failed";
+      return false;
+    }
+  }
+  return true;
+}
 
 std::unique_ptr<Detector> MakeDetector(Arguments& args, const CenterNetConfig& configured,
                                        std::string* why) {
@@ -556,7 +597,8 @@ int RunMapCommand(int argc, char** argv) {
   const std::string out_dir = args.Get("--out", "");
   if (!WriteMapOutputs(mapper, out_dir, &why) ||
       !WriteTimings(report, out_dir + "/timings.csv", &why) ||
-      !WriteKeyframePoses(report, mapper, out_dir + "/keyframes.txt", &why)) {
+      !WriteKeyframePoses(report, mapper, out_dir + "/keyframes.txt", &why) ||
+      !WriteKeyframeImages(report, recorder->keyframe_jpegs(), out_dir + "/keyframes", &why)) {
     return Fail(why);
   }
   if (args.Has("--save-detections") &&
@@ -564,7 +606,7 @@ int RunMapCommand(int argc, char** argv) {
     return Fail(why);
   }
   std::cout << "wrote " << out_dir
-            << "/map.bt, objects.json, objects/*.ply, timings.csv, keyframes.txt"
+            << "/map.bt, objects.json, objects/*.ply, timings.csv, keyframes.txt, keyframes/*.jpg"
             << (input.estimated ? ", trajectory.txt" : "") << "\n";
   return completed ? 0 : 1;
 }

@@ -125,7 +125,10 @@ std::shared_ptr<const ObjectView> ReadObject(const fs::path& dir, const json& en
           : dir / "objects" /
                 (std::to_string(view->id) + "_" + CocoClassFileName(view->class_id) + ".ply");
   auto model = std::make_shared<ColoredPoints>();
-  if (!ReadPly(ply.string(), &model->points, &model->colors, why)) return nullptr;
+  // objmap map writes the models of confirmed objects only; the others are listed without one.
+  std::error_code error;
+  const bool has_model = view->confirmed || fs::exists(ply, error);
+  if (has_model && !ReadPly(ply.string(), &model->points, &model->colors, why)) return nullptr;
   view->model_W = std::move(model);
   return view;
 }
