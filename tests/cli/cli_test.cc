@@ -1,5 +1,6 @@
 // Runs the `objmap` executable on a small rendered 7-Scenes folder, as a user would.
 #include <gtest/gtest.h>
+#include <signal.h>
 
 #include <cmath>
 #include <filesystem>
@@ -8,12 +9,16 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
+#include <thread>
 
 #include "run_objmap.h"
 #include "test_data.h"
 #include "test_scenes.h"
 #include "render/map_picture.h"
 #include "types/coco_classes.h"
+
+// Last: it includes <resolv.h>, whose _res macro breaks Eigen headers included after it.
+#include <httplib.h>
 
 namespace objmap {
 namespace {
@@ -260,6 +265,71 @@ TEST_F(CliScene, RenderShowsEachInventoryObjectInItsClassColour) {
   cv::Scalar mean, deviation;
   cv::meanStdDev(top_picture, mean, deviation);
   EXPECT_GT(deviation[0] + deviation[1] + deviation[2], 30.0);
+}
+
+TEST_F(CliScene, ViewServesTheMapFolderUntilInterrupted) {
+  ASSERT_EQ(RunObjmap(MapArguments("")).exit_code, 0);
+  // objmap map wrote each keyframe's colour image for the viewer's crops.
+  int images = 0;
+  for (const auto& entry : fs::directory_iterator(Path("out/keyframes"))) {
+    images += entry.path().extension() == ".jpg" ? 1 : 0;
+  }
+  EXPECT_EQ(images, 4);
+
+  const std::string log = Path("view.log");
+  const CommandResult started = testing::RunCommand(std::string(OBJMAP_CLI_PATH) + " view " + Path("out") +
+                                           " --http 127.0.0.1:0 > " + log + " 2>&1 & echo $!");
+  const pid_t pid = std::stoi(started.output);
+  std::string printed;
+  std::size_t at = std::string::npos;
+  for (int i = 0; i < 200 && at == std::string::npos; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    std::ifstream file(log);
+    printed.assign(std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>());
+    at = printed.find("at http://127.0.0.1:");
+  }
+  ASSERT_NE(at, std::string::npos) << printed;
+  const int port = std::stoi(printed.substr(at + 20));
+  httplib::Client client("127.0.0.1", port);
+  auto map = client.Get("/api/map");
+  ASSERT_TRUE(map);
+  ASSERT_EQ(map->status, 200) << map->body;
+  const nlohmann::json answer = nlohmann::json::parse(map->body);
+  ASSERT_EQ(answer["inventory"].size(), 1u) << map->body;
+  EXPECT_EQ(answer["inventory"][0]["class"], "cup");
+  EXPECT_EQ(answer["inventory"][0]["count"], 2);
+  const int cup = answer["inventory"][0]["objects"][0];
+  auto detail = client.Get(("/api/objects/" + std::to_string(cup)).c_str());
+  ASSERT_TRUE(detail);
+  const nlohmann::json sightings = nlohmann::json::parse(detail->body)["sightings"];
+  ASSERT_FALSE(sightings.empty());
+  auto crop = client.Get(sightings[0]["image"].get<std::string>().c_str());
+  ASSERT_TRUE(crop);
+  EXPECT_EQ(crop->status, 200) << crop->body;
+  EXPECT_EQ(crop->get_header_value("Content-Type"), "image/jpeg");
+
+  ASSERT_EQ(kill(pid, SIGINT), 0);
+  for (int i = 0; i < 100 && printed.find("stopped") == std::string::npos; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    std::ifstream file(log);
+    printed.assign(std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>());
+  }
+  EXPECT_NE(printed.find("objmap view: stopped"), std::string::npos) << printed;
+}
+
+TEST_F(CliScene, ViewRefusesBadInputWithTheReason) {
+  CommandResult run = RunObjmap("view " + Path("nothing") + " --http 127.0.0.1:0");
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.output.find("nothing/map.bt"), std::string::npos) << run.output;
+  run = RunObjmap("view " + Path("nothing") + " --http 0.0.0.0:8480");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.output.find("--insecure"), std::string::npos) << run.output;
+  run = RunObjmap("view " + Path("nothing") + " --http 127.0.0.1:port");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.output.find("--http"), std::string::npos) << run.output;
+  run = RunObjmap("view");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.output.find("usage: objmap view"), std::string::npos) << run.output;
 }
 
 TEST_F(CliScene, RenderRefusesBadInputWithTheReason) {

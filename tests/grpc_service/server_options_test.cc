@@ -106,4 +106,34 @@ TEST(ServerOptions, AnAddressOtherMachinesReachNeedsTlsAndTokensOrInsecure) {
 }
 
 }  // namespace
+TEST(ServerOptions, TheViewerIsOffByDefaultAndOnLoopbackUnlessInsecure) {
+  const char* plain[] = {"objmap_server", "--db", "map.db"};
+  ServerOptions options;
+  std::string why;
+  ASSERT_TRUE(ParseServerOptions(3, plain, &options, &why)) << why;
+  EXPECT_TRUE(options.http_address.empty());
+
+  const char* port_only[] = {"objmap_server", "--db", "map.db", "--http", "8480",
+                             "--viewer-dir=web"};
+  options = ServerOptions();
+  ASSERT_TRUE(ParseServerOptions(6, port_only, &options, &why)) << why;
+  EXPECT_EQ(options.http_address, "8480");
+  EXPECT_EQ(options.viewer_folder, "web");
+
+  const char* bad_port[] = {"objmap_server", "--db", "map.db", "--http", "127.0.0.1:web"};
+  options = ServerOptions();
+  EXPECT_FALSE(ParseServerOptions(5, bad_port, &options, &why));
+  EXPECT_NE(why.find("--http"), std::string::npos) << why;
+
+  const char* exposed[] = {"objmap_server", "--db", "map.db", "--http", "0.0.0.0:8480"};
+  options = ServerOptions();
+  EXPECT_FALSE(ParseServerOptions(5, exposed, &options, &why));
+  EXPECT_NE(why.find("--insecure"), std::string::npos) << why;
+
+  const char* told[] = {"objmap_server", "--db", "map.db", "--http", "0.0.0.0:8480",
+                        "--listen", "0.0.0.0:50051", "--insecure"};
+  options = ServerOptions();
+  EXPECT_TRUE(ParseServerOptions(8, told, &options, &why)) << why;
+}
+
 }  // namespace objmap

@@ -205,6 +205,7 @@ function objectLink(id) {
 function renderInventory(map) {
   const body = document.querySelector('#inventory tbody');
   body.replaceChildren();
+  document.getElementById('inventory').dataset.version = map.version;
   for (const entry of map.inventory) {
     const row = body.insertRow();
     row.dataset.class = entry.class;

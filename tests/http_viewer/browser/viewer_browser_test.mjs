@@ -78,6 +78,7 @@ try {
   });
   check(url && url.startsWith('http://127.0.0.1:'), `viewer on loopback: ${url}`);
 
+  // --resume skips the keyframes the server holds; --max-keyframes counts the ones sent.
   const ingest = async (count) => {
     const result = await objmap('ingest', args.dataset, '--server', address, '--max-keyframes',
                                 String(count), '--resume');
@@ -91,7 +92,7 @@ try {
 
   browser = await puppeteer.launch({
     executablePath: chromium, headless: true,
-    args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
+    args: ['--no-sandbox', '--disable-dev-shm-usage', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
            '--window-size=1280,900'],
   });
   const page = await browser.newPage();
@@ -166,18 +167,23 @@ try {
   }
 
   // One more keyframe: the change feed brings the page to the new version and inventory.
-  const before = await page.evaluate(() => ({ version: window.objmapViewer.version, updates: window.objmapViewer.updates }));
-  await ingest(keyframes + 1);
+  const before = await page.evaluate(() => ({ version: window.objmapViewer.version, updates: window.objmapViewer.updates,
+                                              keyframes: window.objmapViewer.keyframes }));
+  await ingest(1);
   inventory = await grpcInventory();
   check(inventory.map_version > before.version, `a keyframe arrived: version ${before.version} -> ${inventory.map_version}`);
   await page.waitForFunction((v) => window.objmapViewer.version >= v, { timeout: 60000 }, inventory.map_version)
       .catch(() => {});
   const after = await page.evaluate(() => ({ version: window.objmapViewer.version, updates: window.objmapViewer.updates,
+                                             keyframes: window.objmapViewer.keyframes,
                                              status: document.getElementById('status').textContent }));
-  check(after.version >= inventory.map_version && after.updates > before.updates,
+  check(after.version >= inventory.map_version && after.updates > before.updates &&
+        after.keyframes === before.keyframes + 1,
         `the page followed it: version ${after.version}, "${after.status}"`);
   rows = await table();
-  check(sameCounts(rows, inventory.inventory), `the table lists the new gRPC inventory: ${JSON.stringify(rows)}`);
+  const tableVersion = await page.evaluate(() => Number(document.getElementById('inventory').dataset.version));
+  check(tableVersion >= inventory.map_version && sameCounts(rows, inventory.inventory),
+        `the table was redrawn at version ${tableVersion} and lists the new gRPC inventory: ${JSON.stringify(rows)}`);
 
   // The screenshot: neither blank nor one colour (measured by the browser itself on the PNG).
   const png = await page.screenshot({ type: 'png' });
