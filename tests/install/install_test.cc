@@ -2,6 +2,7 @@
 // fresh prefix, the installed executables run from an unrelated directory, and `objmap map
 // --config` / `objmap_server --config` reading and printing the same file.
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -11,6 +12,7 @@
 #include <string>
 
 #include "cli/run_objmap.h"
+#include "http_viewer/http_viewer.h"
 #include "test_data.h"
 
 namespace objmap {
@@ -227,6 +229,48 @@ TEST_F(Install, InstalledServerReadsTheInstalledConfiguration) {
   EXPECT_EQ(version.exit_code, 0);
   EXPECT_NE(version.output.find("gRPC server and client:  yes"), std::string::npos)
       << version.output;
+#endif
+}
+
+TEST_F(Install, InstalledServerServesTheInstalledViewerFromAnyDirectory) {
+  ASSERT_EQ(install_.exit_code, 0) << install_.output;
+  const fs::path web = fs::path(OBJMAP_SOURCE_DIR) / "server/http_viewer/web";
+  if (!fs::is_regular_file(web / "node_modules/three/build/three.module.js")) {
+    GTEST_SKIP() << "SKIPPED: three.js is not installed in " << web
+                 << "/node_modules (scripts/setup.sh), so the install has no viewer";
+  }
+  const fs::path viewer = Prefix() / "share/objmap/viewer";
+  for (const std::string& file : http_viewer::ViewerFiles()) {
+    EXPECT_EQ(ReadText(viewer / file), ReadText(web / file)) << file;
+  }
+#ifndef OBJMAP_TEST_WITH_SERVER
+  GTEST_SKIP() << "SKIPPED: needs objmap_server (a build with OBJMAP_WITH_GRPC=ON)";
+#else
+  // Started elsewhere, the installed server finds the installed page, not the source tree's.
+  const TempFolder elsewhere("install_viewer");
+  const std::string log = (elsewhere.path() / "server.log").string();
+  const testing::CommandResult started = RunCommand(
+      "cd '" + elsewhere.path().string() + "' && '" + (Prefix() / "bin/objmap_server").string() +
+      "' --db map.db --no-detector --listen 127.0.0.1:0 --http 127.0.0.1:0 > '" + log +
+      "' 2>&1 & echo $!");
+  const pid_t pid = std::stoi(started.output);
+  std::string printed;
+  for (int i = 0; i < 300 && printed.find("listening on") == std::string::npos; ++i) {
+    usleep(50000);
+    printed = ReadText(log);
+  }
+  kill(pid, SIGTERM);
+  EXPECT_NE(printed.find("objmap_server viewer at http://127.0.0.1:"), std::string::npos) << printed;
+  // Without its files, the viewer does not start and the server says where it looked.
+  fs::rename(viewer, viewer.string() + ".moved");
+  const testing::CommandResult missing = RunCommand(
+      "cd '" + elsewhere.path().string() + "' && '" + (Prefix() / "bin/objmap_server").string() +
+      "' --db map2.db --no-detector --listen 127.0.0.1:0 --http 127.0.0.1:0");
+  fs::rename(viewer.string() + ".moved", viewer);
+  EXPECT_EQ(missing.exit_code, 1) << missing.output;
+  EXPECT_NE(missing.output.find("next to the executable: " + viewer.string()), std::string::npos)
+      << missing.output;
+  EXPECT_EQ(missing.output.find("source tree"), std::string::npos) << missing.output;
 #endif
 }
 
