@@ -16,6 +16,7 @@ const state = {
   objects: new Map(),        // id -> {summary, points (THREE.Points), box (THREE.LineSegments)}
   selected: null,            // id of the object shown in the panel
   updates: 0,                // map answers applied (1 after the first load)
+  structureLoads: 0,         // structure answers requested
 };
 window.objmapViewer = state;
 
@@ -84,6 +85,7 @@ function upVector() {
 
 async function loadStructure() {
   structureLoadedAt = Date.now();
+  state.structureLoads += 1;
   const response = await fetch('/api/structure');
   if (!response.ok) throw new Error((await response.json()).error);
   const voxel = parseFloat(response.headers.get('X-Objmap-Voxel-Size')) || 0.01;

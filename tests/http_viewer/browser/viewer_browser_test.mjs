@@ -2,15 +2,15 @@
 // file) fed redkitchen keyframes by `objmap ingest`, its viewer opened in headless Chromium
 // (puppeteer-core). Checks that the inventory table lists what the gRPC inventory answers, that
 // the scene holds one pickable point set per inventory object, that clicking one shows its class
-// and observations (and its keyframe crops), that a keyframe arriving updates the table, that
-// IsFree on a drawn box agrees with `objmap free`, and that the screenshot is neither blank nor
-// uniform. Exit 77 (ctest: skipped) with the reason when Chromium, puppeteer-core, the data or
+// and observations (and its keyframe crops), that a keyframe arriving updates the table, that a
+// pose update's regeneration moves the page's objects to where gRPC has them, that IsFree on a
+// drawn box agrees with `objmap free`, and that the screenshot is neither blank nor uniform. Exit 77 (ctest: skipped) with the reason when Chromium, puppeteer-core, the data or
 // the model is missing.
 //
 // usage: node viewer_browser_test.mjs --server BIN --objmap BIN --dataset DIR --model FILE
 //                                     --out DIR [--chromium PATH] [--keyframes N]
 import { spawn, execFile } from 'node:child_process';
-import { existsSync, mkdirSync, writeFileSync } from 'node:fs';
+import { existsSync, mkdirSync, readFileSync, writeFileSync } from 'node:fs';
 import { createInterface } from 'node:readline';
 import { join } from 'node:path';
 import { promisify } from 'node:util';
@@ -184,6 +184,42 @@ try {
   const tableVersion = await page.evaluate(() => Number(document.getElementById('inventory').dataset.version));
   check(tableVersion >= inventory.map_version && sameCounts(rows, inventory.inventory),
         `the table was redrawn at version ${tableVersion} and lists the new gRPC inventory: ${JSON.stringify(rows)}`);
+
+  // A pose-graph correction (every keyframe 0.5 m along x, through objmap update-poses): the
+  // regeneration reaches the page through the feed, its objects and structure move with it.
+  const posesFile = join(args.out, `poses_${process.pid}.txt`);
+  const exported = await objmap('keyframes', '--server', address, '--out', posesFile);
+  check(exported.code === 0, `objmap keyframes wrote the poses ${exported.stderr || ''}`);
+  const shifted = readFileSync(posesFile, 'utf8').split('\n').map((line) => {
+    const fields = line.split('#')[0].trim().split(/\s+/);
+    if (fields.length < 8) return line;
+    fields[1] = String(Number(fields[1]) + 0.5);
+    return fields.join(' ');
+  }).join('\n');
+  writeFileSync(posesFile, shifted);
+  const beforeUpdate = await page.evaluate(() => ({ loads: window.objmapViewer.structureLoads,
+      centroids: Object.fromEntries(window.objmapViewer.map.objects.map((o) => [o.id, o.centroid])) }));
+  const updated = await objmap('update-poses', posesFile, '--wait', '--server', address);
+  check(updated.code === 0, `objmap update-poses --wait ${updated.stderr || ''}`);
+  inventory = await grpcInventory();
+  await page.waitForFunction((v) => window.objmapViewer.version >= v, { timeout: 60000 }, inventory.map_version)
+      .catch(() => {});
+  await page.waitForFunction((n) => window.objmapViewer.structureLoads > n, { timeout: 20000 },
+                             beforeUpdate.loads).catch(() => {});
+  const movedObjects = JSON.parse((await objmap('objects', '--server', address, '--json')).stdout);
+  const pageObjects = await page.evaluate(() => Object.fromEntries(window.objmapViewer.map.objects
+      .map((o) => [o.id, o.centroid])));
+  const mismatched = movedObjects.filter((o) => !pageObjects[o.id] ||
+      Math.hypot(...o.centroid.map((v, k) => v - pageObjects[o.id][k])) > 1e-3);
+  check(movedObjects.length > 0 && mismatched.length === 0,
+        `after the regeneration the page's objects are where gRPC says (${mismatched.length} of ${movedObjects.length} differ)`);
+  // Every object the page showed before moved by the correction's 0.5 m (kept ids).
+  const shifts = movedObjects.filter((o) => beforeUpdate.centroids[o.id])
+      .map((o) => Math.hypot(...o.centroid.map((v, k) => v - beforeUpdate.centroids[o.id][k])));
+  check(shifts.length > 0 && shifts.every((d) => Math.abs(d - 0.5) < 0.05),
+        `and they moved by the correction: ${shifts.map((d) => d.toFixed(3)).join(' ')} m`);
+  const structureLoads = await page.evaluate(() => window.objmapViewer.structureLoads);
+  check(structureLoads > beforeUpdate.loads, `the page reloaded the moved structure (${structureLoads} loads)`);
 
   // The screenshot: neither blank nor one colour (measured by the browser itself on the PNG).
   const png = await page.screenshot({ type: 'png' });
