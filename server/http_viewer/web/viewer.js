@@ -17,6 +17,7 @@ const state = {
   selected: null,            // id of the object shown in the panel
   updates: 0,                // map answers applied (1 after the first load)
   structureLoads: 0,         // structure answers requested
+  frames: 0,                 // frames drawn
 };
 window.objmapViewer = state;
 
@@ -58,10 +59,23 @@ function resize() {
   renderer.setSize(width, height);
   camera.aspect = width / Math.max(1, height);
   camera.updateProjectionMatrix();
+  requestRender();
 }
+// Drawn when something changed (the camera, the scene, the size), not continuously: an idle
+// viewer costs no CPU, which matters where WebGL runs in software.
+let renderQueued = false;
+function requestRender() {
+  if (renderQueued) return;
+  renderQueued = true;
+  requestAnimationFrame(() => {
+    renderQueued = false;
+    renderer.render(scene, camera);
+    state.frames += 1;
+  });
+}
+controls.addEventListener('change', requestRender);
 window.addEventListener('resize', resize);
 resize();
-renderer.setAnimationLoop(() => { controls.update(); renderer.render(scene, camera); });
 
 async function fetchJson(url, options) {
   const response = await fetch(url, options);
@@ -117,6 +131,7 @@ async function loadStructure() {
   structure = points;
   scene.add(structure);
   if (!framed && count > 0) frame(geometry);
+  requestRender();
 }
 
 function scheduleStructure() {
@@ -173,6 +188,7 @@ function removeObject(id) {
   scene.remove(entry.points, entry.outline);
   entry.points.geometry.dispose();
   state.objects.delete(id);
+  requestRender();
 }
 
 // Brings the scene to `map`: new and changed objects (re)loaded, gone ones removed.
@@ -187,6 +203,7 @@ async function applyObjects(map) {
       removeObject(summary.id);
       scene.add(loaded.points, loaded.outline);
       state.objects.set(summary.id, loaded);
+      requestRender();
     }, (error) => status(`object ${summary.id}: ${error.message}`)));
   }
   await Promise.all(loads);
@@ -265,6 +282,7 @@ async function select(id) {
   for (const [objectId, entry] of state.objects) {
     entry.points.material.size = objectId === id ? OBJECT_POINT_SIZE * 1.8 : OBJECT_POINT_SIZE;
   }
+  requestRender();
 }
 
 // ---------------------------------------------------------------- picking and the IsFree box
@@ -324,6 +342,7 @@ function showBox(box, colour) {
   if (freeBox) scene.remove(freeBox);
   freeBox = new THREE.Box3Helper(box, colour);
   scene.add(freeBox);
+  requestRender();
 }
 
 async function askFree() {
