@@ -137,6 +137,10 @@ bool HttpViewerConfig::IsValid(std::string* why) const {
     *why = "http viewer structure points: need 0 < default <= max";
     return false;
   }
+  if (keep_alive_s < 1 || keep_alive_s > 600) {
+    *why = "http viewer keep_alive_s must be in [1, 600]";
+    return false;
+  }
   if (max_poll_ms < 1 || max_poll_ms > 600000) {
     *why = "http viewer max_poll_ms must be in [1, 600000]";
     return false;
@@ -399,6 +403,9 @@ struct HttpViewer::Impl {
   httplib::Server server;
   std::thread thread;
   std::atomic<bool> stopping{false};
+  /// Long polls waiting in Changes: at most half the threads, so that the other requests always
+  /// find one.
+  std::atomic<int> waiting_polls{0};
   /// URL path -> (content, type): the viewer's files, read once at start. Nothing else on disk
   /// is ever served, whatever the path asks for.
   std::map<std::string, std::pair<std::string, std::string>> files;
@@ -499,7 +506,8 @@ void HttpViewer::Impl::Sighting(const httplib::Request& request, httplib::Respon
   if (color.empty() || color.rgb.size() != static_cast<std::size_t>(color.width) * color.height * 3) {
     throw ApiError{404, "keyframe " + std::to_string(keyframe) + " has no colour image"};
   }
-  response.set_header("Cache-Control", "max-age=3600");
+  // Not cached: another map served later on the same port has other images under the same paths.
+  response.set_header("Cache-Control", "no-store");
   response.set_content(SightingJpeg(color, *sighting), "image/jpeg");
 }
 
@@ -538,6 +546,19 @@ void HttpViewer::Impl::Changes(const httplib::Request& request, httplib::Respons
     timeout_ms = static_cast<int>(
         ParseInteger(Parameter(request, "timeout_ms"), "timeout_ms", 0, config.max_poll_ms));
   }
+  const int max_waiting = config.threads / 2;
+  if (timeout_ms > 0 && waiting_polls.fetch_add(1) >= max_waiting) {
+    waiting_polls.fetch_sub(1);
+    throw ApiError{503, "too many clients follow the map (" + std::to_string(max_waiting) +
+                            " long polls wait already); retry in a few seconds"};
+  }
+  struct Leave {
+    std::atomic<int>* count;
+    bool counted;
+    ~Leave() {
+      if (counted) count->fetch_sub(1);
+    }
+  } leave{&waiting_polls, timeout_ms > 0};
   // In slices, so that stopping the viewer ends a long poll within one.
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
   std::vector<MapChange> changes;
@@ -603,6 +624,7 @@ std::unique_ptr<HttpViewer> HttpViewer::Start(const HttpViewerConfig& config, co
   if (!ParseListenAddress(config.listen_address, &impl.host, &port, why)) return nullptr;
   const int threads = config.threads;
   impl.server.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
+  impl.server.set_keep_alive_timeout(config.keep_alive_s);
   // A page on loopback is reachable from any web page the user opens (DNS rebinding): a request
   // whose Host is not this loopback address is refused.
   const bool loopback = IsLoopbackHost(impl.host);

@@ -36,8 +36,11 @@ struct HttpViewerConfig {
   /// to the network; objmap_server warns about it.
   std::string listen_address = "127.0.0.1:8480";
   std::string viewer_folder;  ///< holds ViewerFiles(); FindViewerFolder
-  /// Request threads; a long-polling page holds one of them.
-  int threads = 8;
+  /// Request threads. A connection holds one while it is open (a browser opens up to six per
+  /// page, one of them in a long poll), so a few pages fit before requests queue.
+  int threads = 16;
+  /// An idle kept-alive connection is closed after this long, freeing its thread.
+  int keep_alive_s = 2;
   /// Most structure points one request returns, and the default.
   std::size_t max_structure_points = 4000000;
   std::size_t default_structure_points = 600000;

@@ -398,7 +398,7 @@ async function follow() {
         scheduleStructure();
       }
     } catch (error) {
-      status('connection lost (' + error.message + '); retrying');
+      status('not following the map (' + error.message + '); retrying');
       await new Promise((resolve) => setTimeout(resolve, 2000));
     }
   }
