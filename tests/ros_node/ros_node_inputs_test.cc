@@ -65,10 +65,14 @@ class RosNodeInputs : public testing::RosFixture {
   }
 
   // Waits until the node has handled `frames` frames (60 s at most).
+  // Until `frames` frames are received and each is also mapped or refused: a frame is counted
+  // when read and mapped a little later (the map server's queue). Every frame of these tests is
+  // a keyframe.
   static objmap_msgs::Status::Response WaitForFrames(const std::string& name, long long frames) {
     objmap_msgs::Status::Response status = Status(name);
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-    while (status.frames_received < frames && std::chrono::steady_clock::now() < deadline) {
+    while ((status.frames_received < frames || status.keyframes + status.frames_rejected < frames) &&
+           std::chrono::steady_clock::now() < deadline) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
       status = Status(name);
     }
