@@ -195,8 +195,7 @@ bool ReadMappedObject(const Json& entry, const fs::path& dir, const std::string&
   if (!*claimed) return true;
   const fs::path ply =
       from_map
-          ? dir / "objects" /
-                (std::to_string(object->id) + "_" + CocoClassFileName(object->class_id) + ".ply")
+          ? dir / "objects" / ObjectModelFileName(object->id, object->class_id)
           : dir / entry.value("ply", std::string());
   std::error_code error;
   if (!fs::is_regular_file(ply, error)) return true;  // no model: no model accuracy

@@ -100,8 +100,8 @@ bool WriteMapOutputs(const Mapper& mapper, const std::string& out_dir, std::stri
   }
   for (const MapObject* object : mapper.ConfirmedObjects()) {
     const ColoredPoints model = mapper.objects().ModelPoints(*object);
-    const std::string path = out_dir + "/objects/" + std::to_string(object->id) + "_" +
-                             CocoClassFileName(object->Label()) + ".ply";
+    const std::string path =
+        out_dir + "/objects/" + ObjectModelFileName(object->id, object->Label());
     if (!WritePly(path, model.points, model.colors, why)) return false;
   }
   return true;

@@ -32,15 +32,14 @@ bool ReadMapScene(const std::string& dir, PictureScene* scene, std::string* why)
   const std::unique_ptr<OccupancyMap> occupancy =
       ReadOctomapFile((fs::path(dir) / "map.bt").string(), OccupancyConfig(), why);
   if (!occupancy) return false;
-  const double resolution_m = occupancy->config().resolution_m;
-  std::string bytes;
-  scene->structure_voxel_m = static_cast<float>(resolution_m);
+  scene->structure_voxel_m = static_cast<float>(occupancy->config().resolution_m);
   const std::vector<Eigen::Vector3d> centres = occupancy->OccupiedVoxelCenters();
   scene->structure_W.reserve(centres.size());
   for (const Eigen::Vector3d& centre : centres) scene->structure_W.push_back(centre.cast<float>());
 
   const std::string json_path = (fs::path(dir) / "objects.json").string();
   if (!fs::exists(json_path)) return true;
+  std::string bytes;
   if (!ReadFile(json_path, &bytes, why)) return false;
   nlohmann::json document;
   try {
@@ -66,9 +65,7 @@ bool ReadMapScene(const std::string& dir, PictureScene* scene, std::string* why)
       const std::string ply =
           entry.contains("ply")
               ? (fs::path(dir) / entry["ply"].get<std::string>()).string()
-              : (fs::path(dir) / "objects" /
-                 (std::to_string(object.id) + "_" + CocoClassFileName(class_id) + ".ply"))
-                    .string();
+              : (fs::path(dir) / "objects" / ObjectModelFileName(object.id, class_id)).string();
       std::vector<std::array<std::uint8_t, 3>> colours;
       if (!ReadPly(ply, &object.points_W, &colours, why)) return false;
       scene->objects.push_back(std::move(object));

@@ -70,4 +70,8 @@ std::string CocoClassFileName(int class_id) {
   return name.empty() ? "unknown" : name;
 }
 
+std::string ObjectModelFileName(std::int64_t object_id, int class_id) {
+  return std::to_string(object_id) + "_" + CocoClassFileName(class_id) + ".ply";
+}
+
 }  // namespace objmap

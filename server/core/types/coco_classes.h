@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <string_view>
 
@@ -17,6 +18,10 @@ inline constexpr int kNumCocoClasses = 80;
 /// Class name made safe for file names ("dining table" -> "dining_table"; "unknown" for
 /// kUnknownClassId and out-of-range ids).
 [[nodiscard]] std::string CocoClassFileName(int class_id);
+
+/// The file of an object's model in a map folder's objects/ ("12_dining_table.ply"): what
+/// `objmap map` writes and what the readers of its folders (eval, render, view) open.
+[[nodiscard]] std::string ObjectModelFileName(std::int64_t object_id, int class_id);
 
 /// The class of a map object that something persistent stands for but no detector has named
 /// (an object-like segment on a supporting plane). Not a COCO class: detectors never report it.
