@@ -122,8 +122,7 @@ std::shared_ptr<const ObjectView> ReadObject(const fs::path& dir, const json& en
   const fs::path ply =
       entry.contains("ply")
           ? dir / entry["ply"].get<std::string>()
-          : dir / "objects" /
-                (std::to_string(view->id) + "_" + CocoClassFileName(view->class_id) + ".ply");
+          : dir / "objects" / ObjectModelFileName(view->id, view->class_id);
   auto model = std::make_shared<ColoredPoints>();
   // objmap map writes the models of confirmed objects only; the others are listed without one.
   std::error_code error;
@@ -241,16 +240,11 @@ ServiceStatus FolderViewerMap::IsFree(const Eigen::Vector3d& min_W, const Eigen:
                                       bool unknown_is_free, bool* free, RegionOccupancy* counts,
                                       std::vector<ObjectId>* objects_inside,
                                       std::uint64_t* version) const {
-  std::string why;
-  if (!ValidateBox(min_W, max_W, "box", &why)) return ServiceStatus::Invalid(why);
-  const double volume = (max_W - min_W).prod();
-  if (volume > impl_->max_query_volume_m3) {
-    return ServiceStatus::Invalid("box of " + std::to_string(volume) + " m^3 exceeds " +
-                                  std::to_string(impl_->max_query_volume_m3) + " m^3");
-  }
+  const ServiceStatus box = CheckQueryBox(min_W, max_W, "region", impl_->max_query_volume_m3);
+  if (!box.ok()) return box;
   *counts = impl_->occupancy->QueryRegion(min_W, max_W, 0.0, 0);
   std::vector<ObjectId> inside = ObjectsInBox(*impl_->snapshot, min_W, max_W);
-  *free = counts->occupied == 0 && inside.empty() && (unknown_is_free || counts->unknown == 0);
+  *free = BoxIsFree(*counts, inside, unknown_is_free);
   if (objects_inside != nullptr) *objects_inside = std::move(inside);
   *version = impl_->snapshot->version;
   return ServiceStatus::Ok();

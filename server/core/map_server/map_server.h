@@ -337,4 +337,14 @@ void ThinEvenly(std::size_t max_count, std::vector<Eigen::Vector3d>* points);
 [[nodiscard]] bool ValidateBox(const Eigen::Vector3d& min_W, const Eigen::Vector3d& max_W,
                                const std::string& field, std::string* why);
 
+/// Checks the box of an occupancy query (QueryOccupancy, IsFree): ValidateBox's checks and a
+/// volume of at most `max_volume_m3` (MapServerConfig::max_query_volume_m3).
+[[nodiscard]] ServiceStatus CheckQueryBox(const Eigen::Vector3d& min_W,
+                                          const Eigen::Vector3d& max_W, const std::string& field,
+                                          double max_volume_m3);
+
+/// IsFree's answer from the box's occupancy counts and the objects with a model point in it.
+[[nodiscard]] bool BoxIsFree(const RegionOccupancy& counts,
+                             const std::vector<ObjectId>& objects_inside, bool unknown_is_free);
+
 }  // namespace objmap

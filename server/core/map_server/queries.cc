@@ -170,15 +170,10 @@ ServiceStatus MapServer::Impl::ReadRegion(const Eigen::Vector3d& min_W,
                                           const Eigen::Vector3d& max_W, double resolution_m,
                                           bool list_voxels, std::size_t max_voxels,
                                           RegionOccupancy* region, std::uint64_t* version) const {
-  std::string why;
-  if (!ValidateBox(min_W, max_W, "region", &why)) return ServiceStatus::Invalid(why);
+  const ServiceStatus box = CheckQueryBox(min_W, max_W, "region", config.max_query_volume_m3);
+  if (!box.ok()) return box;
   if (!std::isfinite(resolution_m) || resolution_m < 0.0) {
     return ServiceStatus::Invalid("resolution must be finite and >= 0");
-  }
-  const double volume = (max_W - min_W).prod();
-  if (volume > config.max_query_volume_m3) {
-    return ServiceStatus::Invalid("region volume " + std::to_string(volume) + " m^3 exceeds " +
-                                  std::to_string(config.max_query_volume_m3));
   }
   const std::size_t limit = std::min<std::size_t>(
       max_voxels == 0 ? config.max_listed_voxels : max_voxels,
@@ -188,6 +183,23 @@ ServiceStatus MapServer::Impl::ReadRegion(const Eigen::Vector3d& min_W,
     *region = map.QueryRegion(min_W, max_W, resolution_m, list_voxels ? limit : 0);
   });
   return ServiceStatus::Ok();
+}
+
+ServiceStatus CheckQueryBox(const Eigen::Vector3d& min_W, const Eigen::Vector3d& max_W,
+                            const std::string& field, double max_volume_m3) {
+  std::string why;
+  if (!ValidateBox(min_W, max_W, field, &why)) return ServiceStatus::Invalid(why);
+  const double volume = (max_W - min_W).prod();
+  if (volume > max_volume_m3) {
+    return ServiceStatus::Invalid(field + " volume " + std::to_string(volume) + " m^3 exceeds " +
+                                  std::to_string(max_volume_m3));
+  }
+  return ServiceStatus::Ok();
+}
+
+bool BoxIsFree(const RegionOccupancy& counts, const std::vector<ObjectId>& objects_inside,
+               bool unknown_is_free) {
+  return counts.occupied == 0 && objects_inside.empty() && (unknown_is_free || counts.unknown == 0);
 }
 
 std::vector<ObjectId> ObjectsInBox(const MapSnapshot& snapshot, const Eigen::Vector3d& min_W,
@@ -214,7 +226,7 @@ ServiceStatus MapServer::IsFree(const Eigen::Vector3d& min_W, const Eigen::Vecto
   ServiceStatus status = impl_->ReadRegion(min_W, max_W, 0.0, false, 0, counts, version);
   if (!status.ok()) return status;
   std::vector<ObjectId> inside = ObjectsInBox(*snapshot, min_W, max_W);
-  *free = counts->occupied == 0 && inside.empty() && (unknown_is_free || counts->unknown == 0);
+  *free = BoxIsFree(*counts, inside, unknown_is_free);
   if (objects_inside != nullptr) *objects_inside = std::move(inside);
   return status;
 }
