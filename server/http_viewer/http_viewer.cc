@@ -267,6 +267,15 @@ json ObjectSummary(const ObjectView& view, bool in_inventory) {
               {"changed_version", view.changed_version}};
 }
 
+// The ids the inventory counts.
+std::set<ObjectId> InventoryObjects(const MapSnapshot& snapshot) {
+  std::set<ObjectId> counted;
+  for (const InventoryEntry& entry : snapshot.inventory) {
+    counted.insert(entry.objects.begin(), entry.objects.end());
+  }
+  return counted;
+}
+
 json MapJson(const ViewerMap& map) {
   const std::shared_ptr<const MapSnapshot> snapshot = map.Snapshot();
   json inventory = json::array();
@@ -279,10 +288,7 @@ json MapJson(const ViewerMap& map) {
                          {"mean_confidence", entry.mean_confidence},
                          {"objects", entry.objects}});
   }
-  std::set<ObjectId> counted;
-  for (const InventoryEntry& entry : snapshot->inventory) {
-    counted.insert(entry.objects.begin(), entry.objects.end());
-  }
+  const std::set<ObjectId> counted = InventoryObjects(*snapshot);
   json objects = json::array();
   for (const auto& [id, view] : snapshot->objects) {
     objects.push_back(ObjectSummary(*view, counted.count(id) > 0));
@@ -308,11 +314,7 @@ std::shared_ptr<const ObjectView> FindObject(const MapSnapshot& snapshot, const 
 }
 
 json ObjectDetailJson(const MapSnapshot& snapshot, const ObjectView& view) {
-  const bool counted = std::any_of(
-      snapshot.inventory.begin(), snapshot.inventory.end(), [&](const InventoryEntry& entry) {
-        return std::find(entry.objects.begin(), entry.objects.end(), view.id) != entry.objects.end();
-      });
-  json detail = ObjectSummary(view, counted);
+  json detail = ObjectSummary(view, InventoryObjects(snapshot).count(view.id) > 0);
   json scores = json::array();
   for (const auto& [class_id, score] : view.scores) {
     scores.push_back({{"class", ClassName(class_id)}, {"score", score}});
