@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_timing.h"
 #include "association/associator.h"
 #include "dataset/sequence_reader.h"
 #include "detection/centernet_detector.h"
@@ -26,12 +27,9 @@
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using objmap::bench::Clock;
+using objmap::bench::Ms;
 using objmap::ObjectId;
-
-double Ms(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 double Percentile(std::vector<double> values, double fraction) {
   if (values.empty()) return 0.0;

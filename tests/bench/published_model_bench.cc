@@ -13,23 +13,16 @@
 #include <string>
 #include <vector>
 
+#include "bench_timing.h"
 #include "dataset/sequence_reader.h"
 #include "detection/detections_file.h"
 #include "mapper/mapper.h"
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double Ms(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-double Median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
-  return values[values.size() / 2];
-}
+using objmap::bench::Clock;
+using objmap::bench::Ms;
+using objmap::bench::Median;
 
 struct Timings {
   std::vector<double> keyframe_ms, publish_ms, points_ms;

@@ -19,19 +19,17 @@
 #include <string>
 #include <vector>
 
+#include "bench_timing.h"
 #include "dataset/sequence_reader.h"
 #include "mapper/mapper.h"
 #include "occupancy/occupancy_map.h"
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using objmap::bench::Clock;
+using objmap::bench::Ms;
 using objmap::KeyframeId;
 using objmap::KeyframeRecord;
-
-double Ms(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 double PeakResidentMb() {
   rusage usage{};

@@ -12,21 +12,15 @@
 #include <string>
 #include <vector>
 
+#include "bench_timing.h"
 #include "render/map_picture.h"
 #include "render/map_scene_io.h"
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double Ms(Clock::time_point since) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - since).count();
-}
-
-double Median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  return values.empty() ? 0.0 : values[values.size() / 2];
-}
+using objmap::bench::Clock;
+using objmap::bench::Ms;
+using objmap::bench::Median;
 
 }  // namespace
 

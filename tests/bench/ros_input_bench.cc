@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_timing.h"
 #include "dataset/sequence_reader.h"
 #include "ros_conversions.h"
 #include "rosbag_input.h"
@@ -25,16 +26,9 @@
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double Ms(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-double Median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  return values.empty() ? 0.0 : values[values.size() / 2];
-}
+using objmap::bench::Clock;
+using objmap::bench::Ms;
+using objmap::bench::Median;
 
 template <typename Message>
 std::vector<std::uint8_t> Serialize(const Message& message) {

@@ -25,6 +25,7 @@
 #include <thread>
 #include <vector>
 
+#include "bench_timing.h"
 #include "dataset/keyframe_selector.h"
 #include "dataset/sequence_reader.h"
 #include "detection/centernet_detector.h"
@@ -39,11 +40,8 @@ namespace objmap {
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
-
-double Ms(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
+using objmap::bench::Clock;
+using objmap::bench::Ms;
 
 double Percentile(std::vector<double> values, double p) {
   if (values.empty()) return 0.0;

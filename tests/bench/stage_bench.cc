@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_timing.h"
 #include "dataset/sequence_reader.h"
 #include "detection/centernet_detector.h"
 #include "pipeline/sequence_runner.h"
@@ -18,11 +19,8 @@
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double Ms(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
+using objmap::bench::Clock;
+using objmap::bench::Ms;
 
 // PCL's supervoxels with the parameters of its tutorial scaled to a Kinect frame.
 double PclSupervoxelMs(const objmap::OrganizedCloud& cloud, std::size_t* clusters) {

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_timing.h"
 #include "http_viewer/http_viewer.h"
 #include "http_viewer/viewer_map.h"
 
@@ -22,16 +23,9 @@
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double Ms(Clock::time_point since) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - since).count();
-}
-
-double Median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  return values.empty() ? 0.0 : values[values.size() / 2];
-}
+using objmap::bench::Clock;
+using objmap::bench::Ms;
+using objmap::bench::Median;
 
 // GET `path`; its size in bytes, or -1 (with a message) when it failed.
 long long Fetch(httplib::Client& client, const std::string& path, std::string* body = nullptr) {
