@@ -111,8 +111,10 @@ TEST_F(KeyframeStoreRecoveryTest, RejectsANewerSchemaVersion) {
 
 TEST_F(KeyframeStoreRecoveryTest, MigratesASchemaVersion1FileAndKeepsItsKeyframes) {
   CreateStore(Path(), 3);
-  // What a version 1 file looks like: no checkpoint table.
-  RunSql(Path(), "DROP TABLE occupancy_checkpoint; PRAGMA user_version = 1;");
+  // What a version 1 file looks like: no checkpoint table, no sessions.
+  RunSql(Path(),
+         "DROP TABLE occupancy_checkpoint; DROP TABLE sessions; DROP INDEX keyframes_by_session;"
+         " ALTER TABLE keyframes DROP COLUMN session_id; PRAGMA user_version = 1;");
   std::string why;
   auto store = KeyframeStore::Open(Path(), KeyframeStoreConfig{}, &why);
   ASSERT_NE(store, nullptr) << why;
@@ -126,12 +128,75 @@ TEST_F(KeyframeStoreRecoveryTest, MigratesASchemaVersion1FileAndKeepsItsKeyframe
   saved.occupancy_state = "state";
   EXPECT_TRUE(store->SaveCheckpoint(saved, &why)) << why;
   store.reset();
-  // Reopened, it is a version 2 file like a new one.
+  // Reopened, it is a file of this version like a new one.
   store = KeyframeStore::Open(Path(), KeyframeStoreConfig{}, &why);
   ASSERT_NE(store, nullptr) << why;
   ASSERT_TRUE(store->LoadCheckpoint(&checkpoint, &why)) << why;
   ASSERT_TRUE(checkpoint.has_value());
   EXPECT_EQ(checkpoint->map_version, 3u);
+}
+
+// A version 2 file (before sessions) opens with its keyframes in session 1, whose name, pose
+// source and times are not known; new keyframes go on in sessions of their own.
+TEST_F(KeyframeStoreRecoveryTest, MigratesASchemaVersion2FileIntoOneSession) {
+  CreateStore(Path(), 3);
+  RunSql(Path(),
+         "DROP TABLE sessions; DROP INDEX keyframes_by_session;"
+         " ALTER TABLE keyframes DROP COLUMN session_id; PRAGMA user_version = 2;");
+  std::string why;
+  auto store = KeyframeStore::Open(Path(), KeyframeStoreConfig{}, &why);
+  ASSERT_NE(store, nullptr) << why;
+  std::vector<SessionSummary> sessions;
+  ASSERT_TRUE(store->ListSessions(&sessions, &why)) << why;
+  ASSERT_EQ(sessions.size(), 1u);
+  EXPECT_EQ(sessions[0].session.id, 1);
+  EXPECT_EQ(sessions[0].keyframes, 3u);
+  EXPECT_EQ(sessions[0].first_keyframe, 1);
+  EXPECT_EQ(sessions[0].last_keyframe, 3);
+  EXPECT_EQ(sessions[0].first_stamp_s, MakeKeyframe(1).stamp_s);
+  EXPECT_EQ(sessions[0].last_stamp_s, MakeKeyframe(3).stamp_s);
+  EXPECT_FALSE(sessions[0].session.started_s.has_value());
+  EXPECT_TRUE(sessions[0].session.pose_source.empty());
+  StoredMap map;
+  ASSERT_TRUE(store->LoadAll(&map, &why)) << why;
+  ASSERT_EQ(map.keyframes.size(), 3u);
+  for (const StoredKeyframe& keyframe : map.keyframes) EXPECT_EQ(keyframe.session_id, 1);
+
+  StoreChange next;
+  next.sessions.push_back({2, "second visit", "estimate", 1.8e9, std::nullopt});
+  next.keyframe = MakeKeyframe(4);
+  next.keyframe->session_id = 2;
+  ASSERT_TRUE(store->Commit(next, &why)) << why;
+  store.reset();
+  store = KeyframeStore::Open(Path(), KeyframeStoreConfig{}, &why);
+  ASSERT_NE(store, nullptr) << why;
+  ASSERT_TRUE(store->ListSessions(&sessions, &why)) << why;
+  ASSERT_EQ(sessions.size(), 2u);
+  EXPECT_EQ(sessions[1].session.name, "second visit");
+  EXPECT_EQ(sessions[1].session.pose_source, "estimate");
+  EXPECT_EQ(sessions[1].session.started_s, 1.8e9);
+  EXPECT_FALSE(sessions[1].session.ended_s.has_value());
+  EXPECT_EQ(sessions[1].keyframes, 1u);
+  EXPECT_EQ(sessions[1].first_keyframe, 4);
+  std::vector<KeyframeSummary> listed;
+  ASSERT_TRUE(store->ListKeyframes(0, 0, &listed, &why)) << why;
+  ASSERT_EQ(listed.size(), 4u);
+  EXPECT_EQ(listed[2].session_id, 1);
+  EXPECT_EQ(listed[3].session_id, 2);
+}
+
+// An empty version 2 file has no session to migrate.
+TEST_F(KeyframeStoreRecoveryTest, MigratesAnEmptySchemaVersion2FileWithoutSessions) {
+  CreateStore(Path(), 0);
+  RunSql(Path(),
+         "DROP TABLE sessions; DROP INDEX keyframes_by_session;"
+         " ALTER TABLE keyframes DROP COLUMN session_id; PRAGMA user_version = 2;");
+  std::string why;
+  auto store = KeyframeStore::Open(Path(), KeyframeStoreConfig{}, &why);
+  ASSERT_NE(store, nullptr) << why;
+  std::vector<SessionSummary> sessions;
+  ASSERT_TRUE(store->ListSessions(&sessions, &why)) << why;
+  EXPECT_TRUE(sessions.empty());
 }
 
 TEST_F(KeyframeStoreRecoveryTest, CheckpointRoundTripsAndACorruptOneIsReported) {

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cmath>
 #include <thread>
 
 #include "store/keyframe_codec.h"
@@ -292,6 +293,20 @@ TEST_F(KeyframeStoreTest, FailedCommitsLeaveTheDatabaseUnchanged) {
       {change_with(
            [](StoreChange* c) { c->observations[0].observation.segment_C.colors.pop_back(); }),
        "colors"},
+      {change_with([](StoreChange* c) { c->sessions.push_back({0, "zero", "request", 1.0, {}}); }),
+       "session id 0 is not positive"},
+      {change_with([](StoreChange* c) {
+         c->sessions.push_back({5, "never", "request", std::nan(""), {}});
+       }),
+       "session 5: its times must be finite"},
+      {change_with([](StoreChange* c) { c->keyframe->session_id = -3; }),
+       "session id -3 is not positive"},
+      // The session is written first; the keyframe that fails takes it back out.
+      {change_with([](StoreChange* c) {
+         c->sessions.push_back({7, "rolled back", "request", 1.0, {}});
+         c->keyframe = MakeKeyframe(2);
+       }),
+       "keyframe id 2 already exists"},
   };
   for (const auto& [change, expected_reason] : failing) {
     std::string why;
@@ -299,10 +314,57 @@ TEST_F(KeyframeStoreTest, FailedCommitsLeaveTheDatabaseUnchanged) {
     EXPECT_NE(why.find(expected_reason), std::string::npos) << why;
   }
   ExpectSameMap(before, Load(*store));
+  std::vector<SessionSummary> sessions;
+  std::string listed;
+  ASSERT_TRUE(store->ListSessions(&sessions, &listed)) << listed;
+  ASSERT_EQ(sessions.size(), 1u);  // session 1, made for the keyframes that named it
+  EXPECT_EQ(sessions[0].session.id, 1);
   // The store still takes changes afterwards.
   std::string why;
   EXPECT_TRUE(store->Commit(change_with([](StoreChange*) {}), &why)) << why;
   EXPECT_EQ(store->NumKeyframes(), 4u);
+}
+
+// A session is written with its first keyframe and ended by replacing its row; keyframes and
+// the session listing say which keyframes each holds.
+TEST_F(KeyframeStoreTest, SessionsAreStoredWithTheirKeyframesAndEndedByReplacingTheirRow) {
+  auto store = OpenStore(Path());
+  ASSERT_NE(store, nullptr);
+  std::string why;
+  const StoredSession first{1, "morning", "request", 1000.0, std::nullopt};
+  StoreChange change;
+  change.sessions = {first};
+  change.keyframe = MakeKeyframe(1);
+  ASSERT_TRUE(store->Commit(change, &why)) << why;
+  change = StoreChange{};
+  change.keyframe = MakeKeyframe(2);
+  ASSERT_TRUE(store->Commit(change, &why)) << why;
+  StoredSession ended = first;
+  ended.ended_s = 1500.0;
+  const StoredSession second{2, "evening", "estimate", 2000.0, std::nullopt};
+  change = StoreChange{};
+  change.sessions = {ended, second};
+  change.keyframe = MakeKeyframe(3);
+  change.keyframe->session_id = 2;
+  ASSERT_TRUE(store->Commit(change, &why)) << why;
+
+  std::vector<SessionSummary> sessions;
+  ASSERT_TRUE(store->ListSessions(&sessions, &why)) << why;
+  ASSERT_EQ(sessions.size(), 2u);
+  EXPECT_EQ(sessions[0].session.name, "morning");
+  EXPECT_EQ(sessions[0].session.started_s, 1000.0);
+  EXPECT_EQ(sessions[0].session.ended_s, 1500.0);
+  EXPECT_EQ(sessions[0].keyframes, 2u);
+  EXPECT_EQ(sessions[0].first_keyframe, 1);
+  EXPECT_EQ(sessions[0].last_keyframe, 2);
+  EXPECT_EQ(sessions[1].session.name, "evening");
+  EXPECT_EQ(sessions[1].session.pose_source, "estimate");
+  EXPECT_FALSE(sessions[1].session.ended_s.has_value());
+  EXPECT_EQ(sessions[1].keyframes, 1u);
+  EXPECT_EQ(sessions[1].first_keyframe, 3);
+  StoredKeyframe loaded;
+  ASSERT_TRUE(store->LoadKeyframe(3, &loaded, &why)) << why;
+  EXPECT_EQ(loaded.session_id, 2);
 }
 
 TEST_F(KeyframeStoreTest, BytesOfCountsTheStoredBlobs) {

@@ -105,6 +105,7 @@ inline void ExpectSameKeyframe(const StoredKeyframe& expected, const StoredKeyfr
   EXPECT_EQ(actual.id, expected.id);
   EXPECT_EQ(actual.stamp_s, expected.stamp_s);
   EXPECT_EQ(actual.name, expected.name);
+  EXPECT_EQ(actual.session_id, expected.session_id);
   EXPECT_EQ(actual.T_W_C.matrix(), expected.T_W_C.matrix());  // bit-exact doubles
   EXPECT_EQ(actual.intrinsics.width, expected.intrinsics.width);
   EXPECT_EQ(actual.intrinsics.height, expected.intrinsics.height);

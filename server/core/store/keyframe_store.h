@@ -15,10 +15,14 @@
 
 namespace objmap {
 
+/// A session: one run of keyframes (a server start, a client's StartSession, one `objmap map`).
+using SessionId = std::int64_t;
+
 /// What the store keeps of a keyframe: everything regeneration needs (pose, intrinsics, depth,
 /// which pixels belong to objects) plus the colour image and the detections, for export and audit.
 struct StoredKeyframe {
   KeyframeId id = 0;
+  SessionId session_id = 1;  ///< the session it was mapped in (StoredSession)
   double stamp_s = 0.0;
   std::string name;
   Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
@@ -35,9 +39,31 @@ struct StoredKeyframe {
 /// A keyframe without its images: what ListKeyframes returns.
 struct KeyframeSummary {
   KeyframeId id = 0;
+  SessionId session_id = 1;
   double stamp_s = 0.0;
   std::string name;
   Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();  ///< the current (last stored) pose
+};
+
+/// A session: one run of keyframes into the map (a server start, a client's StartSession, one
+/// `objmap map` run). Times are wall-clock seconds since the Unix epoch; keyframes carry their
+/// camera's own stamps instead.
+struct StoredSession {
+  SessionId id = 0;
+  std::string name;
+  /// How its keyframes got their poses: "request" or "estimate" (PoseSourceName); empty for the
+  /// one session a database made before sessions existed is opened as.
+  std::string pose_source;
+  std::optional<double> started_s;  ///< absent: not known (a database from before sessions)
+  std::optional<double> ended_s;    ///< absent: still open, or its process ended without closing it
+};
+
+/// A stored session with what its keyframes say of it.
+struct SessionSummary {
+  StoredSession session;
+  std::size_t keyframes = 0;
+  KeyframeId first_keyframe = 0, last_keyframe = 0;  ///< 0 without keyframes
+  double first_stamp_s = 0.0, last_stamp_s = 0.0;    ///< camera stamps of those two
 };
 
 /// One observation of one object (see ObjectObservation), with the object that holds it.
@@ -58,9 +84,12 @@ struct StoredObjectSummary {
 
 /// One atomic change of the store: everything a mapping step did. Applied in one transaction:
 /// either all of it is on disk when Commit returns true, or none of it. Applied in this order:
-/// keyframe, replace_all_objects, observations, merged, removed_objects, object_summaries, poses,
+/// sessions, keyframe, replace_all_objects, observations, merged, removed_objects, object_summaries, poses,
 /// metadata (so observations of this change follow its merges and removals).
 struct StoreChange {
+  /// Sessions inserted or replaced (a keyframe's session is written with its first keyframe;
+  /// its end replaces the row), before the keyframe.
+  std::vector<StoredSession> sessions;
   std::optional<StoredKeyframe> keyframe;          ///< a new keyframe
   /// Every stored observation and object summary is deleted first: `observations` and
   /// `object_summaries` then describe all objects (a re-association regrouped them).
@@ -149,6 +178,10 @@ class KeyframeStore {
   [[nodiscard]] bool ListKeyframes(KeyframeId first_id, std::size_t max_count,
                                    std::vector<KeyframeSummary>* keyframes, std::string* why) const;
 
+  /// Every stored session, ascending id, with its keyframe count and range. False with a
+  /// reason when the store cannot be read.
+  [[nodiscard]] bool ListSessions(std::vector<SessionSummary>* sessions, std::string* why) const;
+
   [[nodiscard]] std::size_t NumKeyframes() const;
   /// Bytes of the database file plus its WAL.
   [[nodiscard]] std::uint64_t FileBytes() const;
@@ -161,8 +194,9 @@ class KeyframeStore {
   [[nodiscard]] KeyframeBytes BytesOf(KeyframeId id) const;
 
   [[nodiscard]] const std::string& path() const;
-  /// 2 added the occupancy checkpoint; a version 1 file is migrated when opened.
-  static constexpr int kSchemaVersion = 2;
+  /// 2 added the occupancy checkpoint, 3 the sessions (a database without them opens with its
+  /// keyframes in session 1); older files are migrated when opened.
+  static constexpr int kSchemaVersion = 3;
 
  private:
   KeyframeStore();

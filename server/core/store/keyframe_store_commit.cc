@@ -1,5 +1,6 @@
 // KeyframeStore::Commit: validation and encoding outside the write lock, then one transaction.
 
+#include <cmath>
 #include <initializer_list>
 #include <optional>
 #include <utility>
@@ -72,6 +73,22 @@ bool EncodeKeyframe(const StoredKeyframe& keyframe, int jpeg_quality, EncodedKey
 }
 
 bool CheckChange(const StoreChange& change, std::string* why) {
+  if (change.keyframe && change.keyframe->session_id <= 0) {
+    *why = "keyframe " + std::to_string(change.keyframe->id) + ": session id " +
+           std::to_string(change.keyframe->session_id) + " is not positive";
+    return false;
+  }
+  for (const StoredSession& session : change.sessions) {
+    if (session.id <= 0) {
+      *why = "session id " + std::to_string(session.id) + " is not positive";
+      return false;
+    }
+    if ((session.started_s && !std::isfinite(*session.started_s)) ||
+        (session.ended_s && !std::isfinite(*session.ended_s))) {
+      *why = "session " + std::to_string(session.id) + ": its times must be finite";
+      return false;
+    }
+  }
   for (const StoredObservation& o : change.observations) {
     const ColoredPoints& segment = o.observation.segment_C;
     if (!segment.colors.empty() && segment.colors.size() != segment.points.size()) {
@@ -95,7 +112,8 @@ bool InsertKeyframe(Connection* db, const StoredKeyframe& k, const EncodedKeyfra
                     std::string* why) {
   auto insert = db->Prepare(
       "INSERT INTO keyframes(id, stamp_s, name, T_W_C, width, height, fx, fy, cx, cy, depth_png,"
-      " mask_png, color_jpeg, detections) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+      " mask_png, color_jpeg, detections, session_id)"
+      " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
       "insert keyframe " + std::to_string(k.id), why);
   if (!insert) return false;
   insert->Bind(1, std::int64_t{k.id}).Bind(2, k.stamp_s).Bind(3, k.name);
@@ -111,11 +129,44 @@ bool InsertKeyframe(Connection* db, const StoredKeyframe& k, const EncodedKeyfra
     insert->BindBlob(13, e.color_jpeg.data(), e.color_jpeg.size());
   }
   insert->BindBlob(14, e.detections.data(), e.detections.size());
+  insert->Bind(15, std::int64_t{k.session_id});
   if (insert->Run(why)) return true;
   if (insert->error_code() == SQLITE_CONSTRAINT_PRIMARYKEY) {
     *why = "keyframe id " + std::to_string(k.id) + " already exists";
   }
   return false;
+}
+
+bool PutSession(Connection* db, const StoredSession& session, std::string* why) {
+  auto put = db->Prepare(
+      "INSERT OR REPLACE INTO sessions(id, name, pose_source, started_s, ended_s)"
+      " VALUES (?, ?, ?, ?, ?)",
+      "store session " + std::to_string(session.id), why);
+  if (!put) return false;
+  put->Bind(1, std::int64_t{session.id}).Bind(2, session.name).Bind(3, session.pose_source);
+  if (session.started_s) {
+    put->Bind(4, *session.started_s);
+  } else {
+    put->BindNull(4);
+  }
+  if (session.ended_s) {
+    put->Bind(5, *session.ended_s);
+  } else {
+    put->BindNull(5);
+  }
+  return put->Run(why);
+}
+
+// A keyframe's session is stored with it when it is not stored yet: under its id alone when
+// the change did not describe it (a caller that knows nothing of sessions maps into session 1).
+bool EnsureKeyframeSession(Connection* db, const StoredKeyframe& k, std::string* why) {
+  auto ensure = db->Prepare(
+      "INSERT OR IGNORE INTO sessions(id, name, pose_source, started_s, ended_s)"
+      " VALUES (?, ?, '', NULL, NULL)",
+      "store the session of keyframe " + std::to_string(k.id), why);
+  return ensure && ensure->Bind(1, std::int64_t{k.session_id})
+                       .Bind(2, "session " + std::to_string(k.session_id))
+                       .Run(why);
 }
 
 bool InsertObservation(Connection* db, const StoredObservation& o, std::string* why) {
@@ -232,8 +283,16 @@ bool KeyframeStore::Commit(const StoreChange& change, std::string* why) {
   std::lock_guard<std::mutex> lock(impl_->write_mutex);
   Connection* db = impl_->writer.get();
   std::string reason;
-  const bool ok = db->Exec("BEGIN IMMEDIATE", &reason) &&
-                  (!change.keyframe || InsertKeyframe(db, *change.keyframe, encoded, &reason)) &&
+  auto put_sessions = [&] {
+    for (const StoredSession& session : change.sessions) {
+      if (!PutSession(db, session, &reason)) return false;
+    }
+    return true;
+  };
+  const bool ok = db->Exec("BEGIN IMMEDIATE", &reason) && put_sessions() &&
+                  (!change.keyframe ||
+                   (EnsureKeyframeSession(db, *change.keyframe, &reason) &&
+                    InsertKeyframe(db, *change.keyframe, encoded, &reason))) &&
                   ApplyObjectChanges(db, change, &reason) &&
                   ApplyPosesAndMeta(db, change, &reason) && db->Exec("COMMIT", &reason);
   if (!ok) {

@@ -18,7 +18,7 @@ using store_internal::Statement;
 
 const char kSelectKeyframes[] =
     "SELECT id, stamp_s, name, T_W_C, width, height, fx, fy, cx, cy, depth_png, mask_png,"
-    " color_jpeg, detections FROM keyframes";
+    " color_jpeg, detections, session_id FROM keyframes";
 
 /// A keyframe row whose images are not decoded yet.
 struct RawKeyframe {
@@ -37,6 +37,7 @@ bool ReadKeyframeRow(const Statement& row, RawKeyframe* raw, std::string* why) {
   k.id = row.Int64(0);
   k.stamp_s = row.Double(1);
   k.name = row.Text(2);
+  k.session_id = row.Int64(14);
   k.intrinsics.width = static_cast<int>(row.Int64(4));
   k.intrinsics.height = static_cast<int>(row.Int64(5));
   k.intrinsics.fx = row.Double(6);
@@ -223,7 +224,8 @@ bool KeyframeStore::ListKeyframes(KeyframeId first_id, std::size_t max_count,
   if (!reader) return false;
   // LIMIT -1 is SQLite's "no limit".
   auto rows = reader.get()->Prepare(
-      "SELECT id, stamp_s, name, T_W_C FROM keyframes WHERE id >= ? ORDER BY id LIMIT ?",
+      "SELECT id, stamp_s, name, T_W_C, session_id FROM keyframes WHERE id >= ? ORDER BY id"
+      " LIMIT ?",
       "list keyframes", why);
   if (!rows) return false;
   rows->Bind(1, std::int64_t{first_id});
@@ -235,11 +237,50 @@ bool KeyframeStore::ListKeyframes(KeyframeId first_id, std::size_t max_count,
     summary.id = rows->Int64(0);
     summary.stamp_s = rows->Double(1);
     summary.name = rows->Text(2);
+    summary.session_id = rows->Int64(4);
     std::size_t pose_bytes = 0;
     const std::uint8_t* pose = rows->Blob(3, &pose_bytes);
     if (!store_internal::UnpackPose(pose, pose_bytes, &summary.T_W_C)) {
       *why = impl_->path + ": keyframe " + std::to_string(summary.id) + ": corrupt pose blob (not a finite rigid transform)";
       return false;
+    }
+  }
+}
+
+bool KeyframeStore::ListSessions(std::vector<SessionSummary>* sessions, std::string* why) const {
+  sessions->clear();
+  auto reader = impl_->readers->Acquire(why);
+  if (!reader) return false;
+  // One statement, so one consistent read; each session's keyframe range comes from the
+  // (session_id, id) index.
+  auto rows = reader.get()->Prepare(
+      "SELECT s.id, s.name, s.pose_source, s.started_s, s.ended_s,"
+      " (SELECT count(*) FROM keyframes WHERE session_id = s.id),"
+      " (SELECT min(id) FROM keyframes WHERE session_id = s.id),"
+      " (SELECT max(id) FROM keyframes WHERE session_id = s.id),"
+      " (SELECT stamp_s FROM keyframes WHERE id ="
+      "   (SELECT min(id) FROM keyframes WHERE session_id = s.id)),"
+      " (SELECT stamp_s FROM keyframes WHERE id ="
+      "   (SELECT max(id) FROM keyframes WHERE session_id = s.id))"
+      " FROM sessions s ORDER BY s.id",
+      "list sessions", why);
+  if (!rows) return false;
+  for (bool has_row = true;;) {
+    if (!rows->Step(&has_row, why)) return false;
+    if (!has_row) return true;
+    SessionSummary& summary = sessions->emplace_back();
+    StoredSession& session = summary.session;
+    session.id = rows->Int64(0);
+    session.name = rows->Text(1);
+    session.pose_source = rows->Text(2);
+    if (!rows->IsNull(3)) session.started_s = rows->Double(3);
+    if (!rows->IsNull(4)) session.ended_s = rows->Double(4);
+    summary.keyframes = static_cast<std::size_t>(rows->Int64(5));
+    if (summary.keyframes > 0) {
+      summary.first_keyframe = rows->Int64(6);
+      summary.last_keyframe = rows->Int64(7);
+      summary.first_stamp_s = rows->Double(8);
+      summary.last_stamp_s = rows->Double(9);
     }
   }
 }

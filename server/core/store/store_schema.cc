@@ -66,11 +66,27 @@ CREATE TABLE occupancy_checkpoint(  -- at most one row: the OctoMap as of a map 
 );
 )sql";
 
+// Version 3: sessions. A database from before them holds one run: its keyframes (if any) become
+// session 1, whose name, pose source and times are not known.
+const char kSchemaV3Sql[] = R"sql(
+CREATE TABLE sessions(  -- runs of keyframes: a server start, a client's StartSession, objmap map
+  id INTEGER PRIMARY KEY,
+  name TEXT NOT NULL,
+  pose_source TEXT NOT NULL,  -- request | estimate; empty: not known (from before sessions)
+  started_s REAL,             -- wall clock, seconds since the Unix epoch; NULL: not known
+  ended_s REAL                -- NULL: open, or its process ended without closing it
+);
+ALTER TABLE keyframes ADD COLUMN session_id INTEGER NOT NULL DEFAULT 1;  -- sessions(id)
+CREATE INDEX keyframes_by_session ON keyframes(session_id, id);
+INSERT INTO sessions(id, name, pose_source, started_s, ended_s)
+  SELECT 1, 'session 1', '', NULL, NULL WHERE EXISTS (SELECT 1 FROM keyframes);
+)sql";
+
 // kMigrations[v - 1] takes schema version v to v + 1.
-const char* const kMigrations[] = {kSchemaV2Sql};
+const char* const kMigrations[] = {kSchemaV2Sql, kSchemaV3Sql};
 
 const char* const kTables[] = {"meta", "keyframes", "observations", "objects",
-                               "occupancy_checkpoint"};
+                               "occupancy_checkpoint", "sessions"};
 
 // Runs the migrations from schema version `from` to this build's.
 bool ApplyMigrations(Connection* db, std::int64_t from, std::string* why) {
