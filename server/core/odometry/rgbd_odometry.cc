@@ -110,10 +110,12 @@ bool OdometryConfig::IsValid(std::string* why) const {
   }
   if (!(max_step_m > 0.0) || !(max_step_deg > 0.0) || !(keyframe_distance_m > 0.0) ||
       !(keyframe_angle_deg > 0.0) || keyframe_min_inliers < min_inliers ||
-      relocalisation_keyframes < 0) {
+      relocalisation_keyframes < 0 || relocalisation_appearance_candidates < 0 ||
+      relocalisation_min_inliers < min_inliers) {
     *why =
         "odometry: step and keyframe limits must be positive, keyframe_min_inliers >= "
-        "min_inliers and relocalisation_keyframes >= 0";
+        "min_inliers, relocalisation_keyframes and relocalisation_appearance_candidates >= 0 "
+        "and relocalisation_min_inliers >= min_inliers";
     return false;
   }
   if (!(edge_sigma_m > 0.0) || !(edge_sigma_deg > 0.0) || !(edge_feature_sigma_m > 0.0) ||
@@ -192,6 +194,15 @@ struct RgbdOdometry::Impl {
   int current_keyframe = -1;
   bool has_last = false;
   Eigen::Isometry3d last_T_W_C = Eigen::Isometry3d::Identity();
+  // The last pose came from a tracked frame (not from a saved map's keyframe): relocalisation
+  // may then trust a weaker fit, checked against the motion.
+  bool last_tracked = false;
+  // Keyframes [0, map_keyframes) are a saved map's (AddMapKeyframe): held in every solve.
+  int map_keyframes = 0;
+  bool tracking_started = false;
+  // Relocalisation's own appearance index (the loop search's may be on the worker thread).
+  AppearanceIndex relocalisation_index;
+  int relocalisation_indexed = 0;
 
   // Background loop closure (OdometryConfig::background_loop_closure): the worker takes one
   // job at a time, and waits until its result is applied before it starts the next, so that
@@ -231,6 +242,10 @@ struct RgbdOdometry::Impl {
   // the appearance index, which only it touches (one search at a time: in Track, or on the
   // worker).
   LoopClosure CloseLoops(const LoopJob& job);
+  // Keyframes anywhere in the map that look most like `features` (appearance index, then the
+  // ratio test on the strongest descriptors), best first, at most `count`, none of `skip`.
+  std::vector<int> LookAlikeKeyframes(const FrameFeatures& features, int count,
+                                      const std::vector<int>& skip);
   AppearanceIndex appearance_index;
   int indexed_keyframes = 0;
   // Moves the keyframes as `closure` says (those made since its job by the same correction as
@@ -362,6 +377,7 @@ LoopClosure RgbdOdometry::Impl::CloseLoops(const LoopJob& job) {
   if (added == 0) return finish();
   PoseGraph graph;
   for (int k = 0; k <= newest; ++k) graph.AddNode(k, job.poses[static_cast<std::size_t>(k)]);
+  for (int k = 0; k < map_keyframes && k <= newest; ++k) graph.SetFixed(k);
   std::string why;
   for (const PoseGraphEdge& edge : edges) {
     if (!graph.AddEdge(edge, &why)) return finish();
@@ -458,6 +474,44 @@ void RgbdOdometry::Impl::StopWorker() {
   worker.join();
 }
 
+std::vector<int> RgbdOdometry::Impl::LookAlikeKeyframes(const FrameFeatures& features, int count,
+                                                        const std::vector<int>& skip) {
+  if (count <= 0) return {};
+  for (; relocalisation_indexed < static_cast<int>(keyframes.size()); ++relocalisation_indexed) {
+    const cv::Mat& descriptors =
+        keyframes[static_cast<std::size_t>(relocalisation_indexed)]->strongest_descriptors;
+    if (descriptors.rows > 0 && descriptors.isContinuous()) {
+      relocalisation_index.Add(relocalisation_indexed, descriptors.ptr<std::uint8_t>(),
+                               descriptors.rows);
+    }
+  }
+  const cv::Mat mine = StrongestDescriptors(features, config.appearance_descriptors);
+  if (mine.rows < 2 || !mine.isContinuous()) return {};
+  const int shortlist_size = std::max(config.appearance_shortlist, count);
+  const cv::BFMatcher matcher(cv::NORM_HAMMING);
+  std::vector<std::pair<int, int>> scored;  // (matches, keyframe)
+  for (const auto& [votes, k] :
+       relocalisation_index.MostAlike(mine.ptr<std::uint8_t>(), mine.rows,
+                                      static_cast<int>(keyframes.size()) - 1, shortlist_size)) {
+    if (std::find(skip.begin(), skip.end(), k) != skip.end()) continue;
+    const cv::Mat& theirs = keyframes[static_cast<std::size_t>(k)]->strongest_descriptors;
+    if (theirs.rows < 2) continue;
+    std::vector<std::vector<cv::DMatch>> knn;
+    matcher.knnMatch(mine, theirs, knn, 2);
+    int matches = 0;
+    for (const auto& pair : knn) {
+      matches += pair.size() == 2 && pair[0].distance < config.match_ratio * pair[1].distance;
+    }
+    if (matches >= config.min_inliers) scored.emplace_back(matches, k);
+  }
+  std::sort(scored.rbegin(), scored.rend());
+  std::vector<int> best;
+  for (std::size_t i = 0; i < scored.size() && static_cast<int>(i) < count; ++i) {
+    best.push_back(scored[i].second);
+  }
+  return best;
+}
+
 bool RgbdOdometry::Impl::Extract(const RgbdFrame& frame, FrameFeatures* features,
                                  std::string* why) {
   const CameraIntrinsics& K = frame.intrinsics;
@@ -527,6 +581,7 @@ bool RgbdOdometry::Impl::Start(const FrameFeatures& features, const Eigen::Isome
   }
   AddKeyframe(features, T_W_C);
   has_last = true;
+  last_tracked = true;
   last_T_W_C = T_W_C;
   return true;
 }
@@ -654,7 +709,32 @@ bool RgbdOdometry::StartFromKnownPose(const RgbdFrame& frame, std::string* why) 
     return false;
   }
   FrameFeatures features;
-  return impl.Extract(frame, &features, why) && impl.Start(features, frame.T_W_C, why);
+  if (!impl.Extract(frame, &features, why) || !impl.Start(features, frame.T_W_C, why)) {
+    return false;
+  }
+  return true;
+}
+
+bool RgbdOdometry::AddMapKeyframe(const RgbdFrame& frame, std::string* why) {
+  Impl& impl = *impl_;
+  if (impl.tracking_started || impl.map_keyframes != static_cast<int>(impl.keyframes.size())) {
+    *why = "tracking has already started";
+    return false;
+  }
+  FrameFeatures features;
+  if (!impl.Extract(frame, &features, why)) return false;
+  const auto with_depth = std::count(features.valid.begin(), features.valid.end(), std::uint8_t{1});
+  if (with_depth < impl.config.min_inliers) {
+    *why = std::to_string(with_depth) + " keypoints with depth, " +
+           std::to_string(impl.config.min_inliers) + " needed";
+    return false;
+  }
+  impl.AddKeyframe(features, frame.T_W_C);
+  impl.map_keyframes = static_cast<int>(impl.keyframes.size());
+  impl.has_last = true;
+  impl.last_T_W_C = frame.T_W_C;
+  impl.last_tracked = false;
+  return true;
 }
 
 int RgbdOdometry::num_keyframes() const { return static_cast<int>(impl_->keyframes.size()); }
@@ -668,6 +748,7 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
   };
   Impl& impl = *impl_;
   const OdometryConfig& config = impl.config;
+  impl.tracking_started = true;
   // Loops the worker closed since the last frame move the keyframes before this frame is
   // tracked against them.
   report.loops_closed = impl.ApplyFinished(&report.loop_ms);
@@ -699,10 +780,24 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
     return true;
   };
 
+  // Without a recent tracked pose, the camera may be anywhere: every fit must be strong.
+  const bool strict = !impl.has_last || !impl.last_tracked;
+  auto strong = [&](const PoseFit& candidate) {
+    return candidate.ok && candidate.inliers >= config.relocalisation_min_inliers &&
+           (!config.depth_refinement || candidate.depth_refined);
+  };
   PoseFit fit = impl.Fit(*features, *impl.keyframes[static_cast<std::size_t>(impl.current_keyframe)],
                          frame.intrinsics);
   std::string implausible;
-  bool accepted = fit.ok && plausible(pose_of(impl.current_keyframe) * fit.T_K_C, &implausible);
+  bool accepted = fit.ok && plausible(pose_of(impl.current_keyframe) * fit.T_K_C, &implausible) &&
+                  (!strict || strong(fit));
+  if (fit.ok && strict && !strong(fit)) {
+    fit.why = std::to_string(fit.inliers) + " PnP inliers" +
+              (config.depth_refinement && !fit.depth_refined ? " without a dense alignment" : "") +
+              " against the saved map's keyframe, " +
+              std::to_string(config.relocalisation_min_inliers) + " needed to place the camera";
+    fit.ok = false;
+  }
   report.reference_keyframe = impl.current_keyframe;
   report.status = TrackingStatus::kTracked;
   if (!accepted) {
@@ -718,12 +813,24 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
     if (static_cast<int>(order.size()) > config.relocalisation_keyframes) {
       order.resize(static_cast<std::size_t>(config.relocalisation_keyframes));
     }
+    // Then those that look like the frame, wherever they are: only these can place a camera
+    // that starts far from the last pose.
+    std::vector<int> tried = order;
+    tried.push_back(impl.current_keyframe);
+    const std::size_t by_distance = order.size();
+    for (int k : impl.LookAlikeKeyframes(*features, config.relocalisation_appearance_candidates,
+                                         tried)) {
+      order.push_back(k);
+    }
     const std::string first_failure = fit.ok ? implausible : fit.why;
-    for (int k : order) {
+    for (std::size_t i = 0; i < order.size(); ++i) {
+      const int k = order[i];
       PoseFit candidate =
           impl.Fit(*features, *impl.keyframes[static_cast<std::size_t>(k)], frame.intrinsics);
-      // After a loss the last pose may be old: only the fit itself is checked.
-      if (candidate.ok) {
+      // After a loss the last pose may be old: only the fit itself is checked, and strictly
+      // where no recent motion or nearness vouches for it.
+      const bool must_be_strong = strict || i >= by_distance;
+      if (candidate.ok && (!must_be_strong || strong(candidate))) {
         fit = candidate;
         accepted = true;
         report.reference_keyframe = k;
@@ -749,6 +856,7 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
   report.depth_refined = fit.depth_refined;
   report.depth_rmse_m = fit.depth_rmse_m;
   impl.has_last = true;
+  impl.last_tracked = true;
   impl.last_T_W_C = T_W_C;
 
   const bool needs_keyframe = fit.T_K_C.translation().norm() > config.keyframe_distance_m ||

@@ -93,6 +93,15 @@ struct OdometryConfig {
   /// Keyframes tried, nearest to the last pose first, when tracking against the current one
   /// fails (relocalisation).
   int relocalisation_keyframes = 8;
+  /// ... and the keyframes anywhere in the map that look most like the frame (an appearance
+  /// index over every keyframe, the saved map's included, then the ratio test on the strongest
+  /// descriptors), this many: how a session that starts elsewhere is placed.
+  int relocalisation_appearance_candidates = 4;
+  /// Without a recent tracked pose (a new session, a restart, tracking lost) nothing checks a
+  /// relocalised pose against the motion, so the fit itself must be strong: at least this many
+  /// PnP inliers and, with depth_refinement, the dense step agreeing with the features (a wrong
+  /// place that shares a few features with the frame rarely passes both).
+  int relocalisation_min_inliers = 60;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
@@ -145,6 +154,14 @@ class RgbdOdometry {
   /// restart: the newest stored keyframe). Only before the first Track or seed; false with the
   /// reason otherwise, or when the frame has too few keypoints with depth.
   bool StartFromKnownPose(const RgbdFrame& frame, std::string* why);
+
+  /// Adds a keyframe of a saved map at its known pose (frame.T_W_C), before the first Track: it
+  /// is held where it is in every pose-graph solve (the map is settled; a new session joins it),
+  /// and relocalisation finds it by appearance and by distance. Tracking resumes at the last one
+  /// added, but only after a strong fit (relocalisation_min_inliers), since the camera may be
+  /// anywhere. False with the reason when tracking has started or the frame has too few
+  /// keypoints with depth (the keyframe is then left out).
+  bool AddMapKeyframe(const RgbdFrame& frame, std::string* why);
 
   /// With background_loop_closure: waits for the loop searches under way and applies what they
   /// found (the end of a recording). Returns the loops closed by them; 0 without the option.

@@ -115,11 +115,12 @@ PoseGraph::PoseGraph(const PoseGraphConfig& config) : config_(config) {}
 
 void PoseGraph::AddNode(int id, const Eigen::Isometry3d& T_W_N) {
   poses_[id] = T_W_N;
-  if (!fixed_set_ && fixed_ < 0) fixed_ = id;
+  if (!fixed_set_ && fixed_.empty()) fixed_.insert(id);
 }
 
 void PoseGraph::SetFixed(int id) {
-  fixed_ = id;
+  if (!fixed_set_) fixed_.clear();
+  fixed_.insert(id);
   fixed_set_ = true;
 }
 
@@ -160,7 +161,7 @@ double WhitenedSquaredError(const PoseGraphEdge& edge, const std::map<int, NodeS
 
 // One Ceres solve from `poses` with the edges marked active; the optimum in `state`.
 bool SolveGraph(const PoseGraphConfig& config_, const std::map<int, Eigen::Isometry3d>& poses_,
-                const std::vector<PoseGraphEdge>& edges_, int fixed_,
+                const std::vector<PoseGraphEdge>& edges_, const std::set<int>& fixed_,
                 const std::vector<bool>& active, std::map<int, NodeState>* state_out,
                 PoseGraphReport* report, std::string* why) {
   std::map<int, NodeState>& state = *state_out;
@@ -194,10 +195,12 @@ bool SolveGraph(const PoseGraphConfig& config_, const std::map<int, Eigen::Isome
     manifold_used = true;
   }
   if (!manifold_used) delete quaternion_manifold;
-  const auto fixed = state.find(fixed_);
-  if (fixed != state.end() && problem.HasParameterBlock(fixed->second.p.data())) {
-    problem.SetParameterBlockConstant(fixed->second.p.data());
-    problem.SetParameterBlockConstant(fixed->second.q.coeffs().data());
+  for (const int id : fixed_) {
+    const auto fixed = state.find(id);
+    if (fixed != state.end() && problem.HasParameterBlock(fixed->second.p.data())) {
+      problem.SetParameterBlockConstant(fixed->second.p.data());
+      problem.SetParameterBlockConstant(fixed->second.q.coeffs().data());
+    }
   }
 
   ceres::Solver::Options options;

@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -95,7 +96,9 @@ class PoseGraph {
   /// False with the reason when a node is unknown or the information matrix is not symmetric
   /// positive definite.
   [[nodiscard]] bool AddEdge(const PoseGraphEdge& edge, std::string* why);
-  /// Nodes held where they are (the gauge); by default the first node added.
+  /// Holds the node where it is. Every node named so is held (the gauge, or a part of the graph
+  /// that is already settled, such as a saved map that a new session joins); without any, the
+  /// first node added is.
   void SetFixed(int id);
 
   /// Optimizes every node pose but the fixed one (see loop_rejection_chi2 for wrong loops).
@@ -110,8 +113,8 @@ class PoseGraph {
   PoseGraphConfig config_;
   std::map<int, Eigen::Isometry3d> poses_;
   std::vector<PoseGraphEdge> edges_;
-  int fixed_ = -1;
-  bool fixed_set_ = false;
+  std::set<int> fixed_;
+  bool fixed_set_ = false;  // SetFixed was called: the first node is no longer held by default
 };
 
 }  // namespace objmap
