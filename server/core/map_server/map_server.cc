@@ -7,6 +7,7 @@
 
 #include "map_server/map_server_impl.h"
 #include "map_server/store_records.h"
+#include "mapper/map_export.h"
 
 namespace objmap {
 namespace {
@@ -109,6 +110,7 @@ double MapServer::occupancy_resolution_m() const {
 MapServer::~MapServer() {
   Shutdown();
   if (impl_->worker.joinable()) impl_->worker.join();
+  impl_->StoreSessionEnds(/*end_current=*/true);
 }
 
 std::unique_ptr<MapServer> MapServer::Open(const MapServerConfig& config,
@@ -128,6 +130,16 @@ std::unique_ptr<MapServer> MapServer::Open(const MapServerConfig& config,
     return nullptr;
   }
   impl.startup_keyframes_integrated = impl.keyframes_since_checkpoint;
+  std::vector<SessionSummary> sessions;
+  if (!impl.store->ListSessions(&sessions, why)) {
+    *why = "cannot load " + db_path + ": " + *why;
+    return nullptr;
+  }
+  {
+    std::lock_guard<std::mutex> lock(impl.session_mutex);
+    for (const SessionSummary& stored : sessions) impl.stored_sessions.insert(stored.session.id);
+    impl.BeginSessionLocked(sessions.empty() ? 0 : sessions.back().session.id, "");
+  }
   impl.planned_version = version;
   impl.history_start = version;
   impl.snapshot = impl.snapshot_builder.Build(*impl.mapper, version, nullptr);
@@ -210,7 +222,8 @@ ServiceStatus MapServer::Impl::EnqueueLocked(std::shared_ptr<MapJob> job, bool b
     return {StatusCode::kResourceExhausted,
             "ingest queue full (" + std::to_string(queue.size()) + " waiting); retry later"};
   }
-  job->version = ++planned_version;
+  // Writing the folder changes nothing in the map: it takes no version.
+  if (job->kind != MapJob::Kind::kWriteFolder) job->version = ++planned_version;
   queue.push_back(std::move(job));
   queue_cv.notify_one();
   return ServiceStatus::Ok();
@@ -226,8 +239,22 @@ void MapServer::Impl::Run() {
       job = queue.front();
       applying = job.get();  // from now on no pose update merges into it
     }
-    MapJob::Result result =
-        job->kind == MapJob::Kind::kKeyframe ? ApplyKeyframe(job.get()) : ApplyPoses(job.get());
+    MapJob::Result result;
+    switch (job->kind) {
+      case MapJob::Kind::kKeyframe:
+        result = ApplyKeyframe(job.get());
+        break;
+      case MapJob::Kind::kPoses:
+        result = ApplyPoses(job.get());
+        break;
+      case MapJob::Kind::kWriteFolder: {
+        std::string why;
+        result.status = WriteMapOutputs(*mapper, job->folder, &why)
+                            ? ServiceStatus::Ok()
+                            : ServiceStatus{StatusCode::kInternal, why};
+        break;
+      }
+    }
     {
       // Popped only now, so Status() counts the job being applied as queued.
       std::lock_guard<std::mutex> lock(queue_mutex);
@@ -296,6 +323,18 @@ MapJob::Result MapServer::Impl::ApplyKeyframe(MapJob* job) {
   StoreChange change;
   change.keyframe = MakeStoredKeyframe(job->frame, job->detections, result.keyframe_id,
                                        *mapper->FindKeyframe(result.keyframe_id));
+  change.keyframe->session_id = job->session.id;
+  // The keyframe's session is stored with its first keyframe, and the ends of the sessions
+  // before it that are stored.
+  std::vector<StoredSession> ends;
+  {
+    std::lock_guard<std::mutex> lock(session_mutex);
+    if (stored_sessions.count(job->session.id) == 0) change.sessions.push_back(job->session);
+    for (const StoredSession& ended : ended_sessions) {
+      if (stored_sessions.count(ended.id) > 0) ends.push_back(ended);
+    }
+  }
+  change.sessions.insert(change.sessions.end(), ends.begin(), ends.end());
   change.observations = NewObservations(mapper->objects(), touched, result.keyframe_id);
   change.merged = result.merged;
   for (ObjectId id : touched) {
@@ -321,6 +360,18 @@ MapJob::Result MapServer::Impl::ApplyKeyframe(MapJob* job) {
     std::lock_guard<std::mutex> lock(known_mutex);
     known_keyframes.insert(result.keyframe_id);
   }
+  {
+    std::lock_guard<std::mutex> lock(session_mutex);
+    stored_sessions.insert(job->session.id);
+    for (const StoredSession& stored_end : ends) {
+      ended_sessions.erase(std::remove_if(ended_sessions.begin(), ended_sessions.end(),
+                                          [&](const StoredSession& s) {
+                                            return s.id == stored_end.id;
+                                          }),
+                           ended_sessions.end());
+    }
+  }
+  out.keyframe.session_id = job->session.id;
   SnapshotBuilder::Diff diff;
   auto next = snapshot_builder.Build(*mapper, job->version, &diff);
   MapChange map_change{job->version, MapChange::Kind::kKeyframeAdded, result.keyframe_id,
@@ -392,29 +443,6 @@ MapJob::Result MapServer::Impl::ApplyPoses(MapJob* job) {
   return out;
 }
 
-ServiceStatus MapServer::NewestKeyframe(RgbdFrame* frame) const {
-  KeyframeId newest = 0;
-  {
-    std::lock_guard<std::mutex> lock(impl_->known_mutex);
-    if (impl_->known_keyframes.empty()) return ServiceStatus::NotFound("the map has no keyframe");
-    newest = *impl_->known_keyframes.rbegin();
-  }
-  StoredKeyframe stored;
-  std::string why;
-  if (!impl_->store->LoadKeyframe(newest, &stored, &why)) return {StatusCode::kInternal, why};
-  *frame = RgbdFrame();
-  frame->stamp_s = stored.stamp_s;
-  frame->name = "stored keyframe " + std::to_string(newest);
-  frame->intrinsics = stored.intrinsics;
-  frame->T_W_C = stored.T_W_C;
-  frame->color = std::move(stored.color);
-  frame->depth.width = stored.intrinsics.width;
-  frame->depth.height = stored.intrinsics.height;
-  frame->depth.depth_m.reserve(stored.depth_mm.size());
-  for (const std::uint16_t mm : stored.depth_mm) frame->depth.depth_m.push_back(mm * 0.001f);
-  return ServiceStatus::Ok();
-}
-
 ServiceStatus MapServer::KeyframeColor(KeyframeId id, ColorImage* color) const {
   {
     std::lock_guard<std::mutex> lock(impl_->known_mutex);
@@ -426,24 +454,6 @@ ServiceStatus MapServer::KeyframeColor(KeyframeId id, ColorImage* color) const {
   std::string why;
   if (!impl_->store->LoadKeyframe(id, &stored, &why)) return {StatusCode::kInternal, why};
   *color = std::move(stored.color);
-  return ServiceStatus::Ok();
-}
-
-ServiceStatus MapServer::StartTrackingOnStoredMap(RgbdOdometry* odometry,
-                                                  std::string* resumed_from) const {
-  RgbdFrame frame;
-  const ServiceStatus loaded = NewestKeyframe(&frame);
-  if (loaded.code == StatusCode::kNotFound) return ServiceStatus::Ok();
-  std::string why;
-  if (!loaded.ok()) {
-    return {StatusCode::kFailedPrecondition,
-            "tracking cannot resume on the stored map: " + loaded.message};
-  }
-  if (!odometry->StartFromKnownPose(frame, &why)) {
-    return {StatusCode::kFailedPrecondition,
-            "tracking cannot resume on the stored map (from " + frame.name + "): " + why};
-  }
-  *resumed_from = frame.name;
   return ServiceStatus::Ok();
 }
 
@@ -485,6 +495,10 @@ ServiceStatus MapServer::AddKeyframe(RgbdFrame frame,
   }
   const Eigen::Isometry3d mapped_pose = frame.T_W_C;
   job->frame = std::move(frame);
+  {
+    std::lock_guard<std::mutex> lock(impl_->session_mutex);
+    job->session = impl_->session;
+  }
   const std::shared_future<MapJob::Result> done = job->result;
   ServiceStatus queued = impl_->Enqueue(job, /*bounded=*/true);
   if (!queued.ok()) return queued;
@@ -495,6 +509,7 @@ ServiceStatus MapServer::AddKeyframe(RgbdFrame frame,
   if (!impl_->odometry) return result.status;
   impl_->tracked_keyframes.Add(outcome->keyframe_id, tracked, *impl_->odometry);
   outcome->loops_closed = tracked.loops_closed;
+  outcome->relocalized = tracked.status == TrackingStatus::kRelocalized;
   if (tracked.loops_closed == 0) return result.status;
   // A loop closed: every tracked keyframe follows the odometry keyframe it was tracked against.
   PoseUpdateOutcome update;
@@ -563,6 +578,17 @@ ServiceStatus MapServer::UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3
   return result.status;
 }
 
+ServiceStatus MapServer::WriteMapFolder(const std::string& dir) {
+  if (dir.empty()) return ServiceStatus::Invalid("folder: empty");
+  auto job = std::make_shared<MapJob>();
+  job->kind = MapJob::Kind::kWriteFolder;
+  job->folder = dir;
+  const std::shared_future<MapJob::Result> done = job->result;
+  ServiceStatus queued = impl_->Enqueue(job, /*bounded=*/false);
+  if (!queued.ok()) return queued;
+  return done.get().status;
+}
+
 ServerStatus MapServer::Status() const {
   const auto snapshot = impl_->Current();
   ServerStatus status;
@@ -587,6 +613,11 @@ ServerStatus MapServer::Status() const {
   impl_->mapper->ReadOccupancy(
       [&](const OccupancyMap& map) { status.occupancy_bytes = map.MemoryBytes(); });
   status.occupancy_copies = impl_->config.mapper.occupancy_second_copy ? 2 : 1;
+  {
+    std::lock_guard<std::mutex> lock(impl_->session_mutex);
+    status.session_id = impl_->session.id;
+    status.session_name = impl_->session.name;
+  }
   return status;
 }
 

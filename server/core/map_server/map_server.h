@@ -83,6 +83,9 @@ struct MapServerConfig {
   /// what saving that checkpoint took: a large map, slower to save, is saved less often, and
   /// saving never takes more than about 1 / (1 + this) of the mapping thread's time.
   double checkpoint_work_ratio = 10.0;
+  /// With kEstimate: stored keyframes (the newest ones) that tracking loads at each session
+  /// start to place the camera in the saved map by relocalisation. 0: all of them.
+  int relocalisation_map_keyframes = 0;
   /// What one request may ask (config section server: max_image_pixels, ...).
   RequestLimits limits;
   /// How writes and queries share the CPU (config section server: heavy_query_threads, ...).
@@ -151,6 +154,10 @@ struct AddKeyframeOutcome {
   Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
   /// PoseSource::kEstimate: loops this keyframe closed (every tracked keyframe then moved).
   int loops_closed = 0;
+  /// PoseSource::kEstimate: the camera was placed in the map by relocalisation for this
+  /// keyframe (the first of a session on a saved map, or after tracking was lost).
+  bool relocalized = false;
+  SessionId session_id = 0;  ///< the session it was mapped in
 };
 
 struct PoseUpdateOutcome {
@@ -195,6 +202,8 @@ struct ServerStatus {
   /// Memory of one copy of the OctoMap (OcTree nodes), and how many copies are kept.
   std::uint64_t occupancy_bytes = 0;
   int occupancy_copies = 1;
+  SessionId session_id = 0;  ///< the current session (keyframes added now join it)
+  std::string session_name;
 };
 
 /// The mapping server without transport: a durable store, one mapping thread that applies
@@ -235,14 +244,36 @@ class MapServer {
   /// The newest stored keyframe with its images and current pose (where a camera tracker
   /// resumes after a restart); kNotFound on an empty map.
   [[nodiscard]] ServiceStatus NewestKeyframe(RgbdFrame* frame) const;
-  /// Starts `odometry` (not yet started) at the newest stored keyframe, so that tracking goes on
-  /// in the stored map's frame after a restart; `resumed_from` names that keyframe. On an empty
-  /// map: Ok and nothing done (the first frame starts the map). kFailedPrecondition with the
-  /// reason when the keyframe cannot be read or tracked from.
+  /// A stored keyframe with its images and current pose; kNotFound for an unknown id.
+  [[nodiscard]] ServiceStatus StoredFrame(KeyframeId id, RgbdFrame* frame) const;
+  /// Gives `odometry` (not yet started) the stored map's keyframes at their current poses
+  /// (RgbdOdometry::AddMapKeyframe; the newest config.relocalisation_map_keyframes, the newest
+  /// last), so that tracking goes on in the stored map's frame: where it stopped, or wherever
+  /// the camera is placed by relocalisation. `resumed_from` names the newest. On an empty map:
+  /// Ok and nothing done (the first frame starts the map). kFailedPrecondition with the reason
+  /// when the keyframes cannot be read or none can be tracked from.
   [[nodiscard]] ServiceStatus StartTrackingOnStoredMap(RgbdOdometry* odometry,
                                                        std::string* resumed_from) const;
   [[nodiscard]] ServiceStatus UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses,
                                           bool wait, PoseUpdateOutcome* outcome);
+
+  /// Ends the current session and starts a new one (`name` empty: "session N"); every keyframe
+  /// added from now on joins it. A current session that has mapped nothing is replaced, id kept. A session is stored with its first keyframe (a session that
+  /// maps nothing leaves no trace); its end time is stored with the next session's first
+  /// keyframe or at shutdown. Each Open starts a session too. With PoseSource::kEstimate,
+  /// tracking starts over on the saved map: the camera may be anywhere, and the session's first
+  /// keyframe is placed by relocalisation before it is mapped. `started` (may be null)
+  /// receives the new session.
+  [[nodiscard]] ServiceStatus StartSession(const std::string& name, SessionSummary* started);
+  /// Every stored session, ascending id, and the current one (also before its first keyframe,
+  /// then with no keyframes); `current` (may be null) receives its id.
+  [[nodiscard]] ServiceStatus ListSessions(std::vector<SessionSummary>* sessions,
+                                           SessionId* current) const;
+
+  /// Writes the map into folder `dir` as `objmap map` writes its output (WriteMapOutputs:
+  /// map.bt, objects.json, objects/*.ply), after the writes queued before it; queries go on
+  /// meanwhile. kInternal with the file's problem.
+  [[nodiscard]] ServiceStatus WriteMapFolder(const std::string& dir);
 
   /// The current snapshot (never null).
   [[nodiscard]] std::shared_ptr<const MapSnapshot> Snapshot() const;

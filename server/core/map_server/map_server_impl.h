@@ -18,14 +18,17 @@
 
 namespace objmap {
 
-/// A queued write: a keyframe or a pose update, applied by the mapping thread in order.
+/// A queued write: a keyframe or a pose update, applied by the mapping thread in order; or the
+/// map written as files (kWriteFolder), in order with them and without a version of its own.
 struct MapJob {
-  enum class Kind { kKeyframe, kPoses };
+  enum class Kind { kKeyframe, kPoses, kWriteFolder };
   Kind kind = Kind::kKeyframe;
   std::uint64_t version = 0;  ///< the map version this job produces when it succeeds
   RgbdFrame frame;
   std::vector<Detection> detections;
+  StoredSession session;  ///< the session the keyframe joins
   std::map<KeyframeId, Eigen::Isometry3d> poses;
+  std::string folder;  ///< kWriteFolder: where
 
   struct Result {
     ServiceStatus status;
@@ -64,6 +67,19 @@ struct MapServer::Impl {
   std::unique_ptr<RgbdOdometry> odometry;
   TrackedKeyframes tracked_keyframes;
   std::string tracking_blocked;  // why tracking cannot resume on the stored map (empty: it can)
+
+  // Sessions: the current one (keyframes added now join it) and those ended whose end is not
+  // stored yet (written with the next keyframe, or at shutdown). stored_sessions: ids with a
+  // row in the store.
+  mutable std::mutex session_mutex;
+  StoredSession session;
+  std::vector<StoredSession> ended_sessions;
+  std::set<SessionId> stored_sessions;
+  /// Opens the session after `previous_id` (session_mutex held).
+  void BeginSessionLocked(SessionId previous_id, const std::string& name);
+  /// Stores the end of every session ended (and, with `end_current`, of the current one) that
+  /// has a row; at shutdown.
+  void StoreSessionEnds(bool end_current);
 
   // Keyframe ids committed to the store: UpdatePoses validates against them on any thread.
   mutable std::mutex known_mutex;

@@ -1,0 +1,189 @@
+// Sessions (runs of keyframes into one map) and where tracking starts in a session: the stored
+// map's keyframes, so that the camera is placed in the saved map wherever it starts.
+
+#include <algorithm>
+#include <chrono>
+
+#include "map_server/map_server.h"
+#include "map_server/map_server_impl.h"
+
+namespace objmap {
+namespace {
+
+double WallClockSeconds() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+// A session name is shown in tables and stored: printable, one line, not too long.
+bool ValidSessionName(const std::string& name, std::string* why) {
+  constexpr std::size_t kMaxBytes = 200;
+  if (name.size() > kMaxBytes) {
+    *why = "name: " + std::to_string(name.size()) + " bytes, at most " +
+           std::to_string(kMaxBytes);
+    return false;
+  }
+  for (const char c : name) {
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
+      *why = "name: control characters are not allowed";
+      return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+void MapServer::Impl::BeginSessionLocked(SessionId previous_id, const std::string& name) {
+  session = StoredSession{};
+  session.id = previous_id + 1;
+  session.name = name.empty() ? "session " + std::to_string(session.id) : name;
+  session.pose_source = PoseSourceName(config.pose_source);
+  session.started_s = WallClockSeconds();
+}
+
+void MapServer::Impl::StoreSessionEnds(bool end_current) {
+  StoreChange change;
+  {
+    std::lock_guard<std::mutex> lock(session_mutex);
+    for (const StoredSession& ended : ended_sessions) {
+      if (stored_sessions.count(ended.id) > 0) change.sessions.push_back(ended);
+    }
+    if (end_current && stored_sessions.count(session.id) > 0) {
+      StoredSession ended = session;
+      ended.ended_s = WallClockSeconds();
+      change.sessions.push_back(ended);
+    }
+  }
+  std::string why;
+  // Losing an end time loses no keyframe: the session then reads as ended by its process.
+  if (!change.sessions.empty()) (void)store->Commit(change, &why);
+}
+
+ServiceStatus MapServer::StartSession(const std::string& name, SessionSummary* started) {
+  std::string why;
+  if (!ValidSessionName(name, &why)) return ServiceStatus::Invalid(why);
+  if (impl_->shutting_down) return {StatusCode::kUnavailable, "the server is shutting down"};
+  // With estimated poses, no keyframe is being tracked while tracking starts over.
+  std::unique_lock<std::mutex> tracking;
+  if (impl_->odometry) tracking = std::unique_lock<std::mutex>(impl_->tracking_mutex);
+  StoredSession begun;
+  {
+    std::lock_guard<std::mutex> lock(impl_->session_mutex);
+    StoredSession ended = impl_->session;
+    if (impl_->stored_sessions.count(ended.id) > 0) {
+      ended.ended_s = WallClockSeconds();
+      impl_->ended_sessions.push_back(ended);
+      impl_->BeginSessionLocked(ended.id, name);
+    } else {
+      // Nothing was mapped in the current session: the new one takes its place and id (a
+      // client that names its run right after a start leaves no empty session behind).
+      impl_->BeginSessionLocked(ended.id - 1, name);
+    }
+    begun = impl_->session;
+  }
+  if (impl_->odometry) {
+    impl_->odometry = std::make_unique<RgbdOdometry>(impl_->config.odometry);
+    impl_->tracked_keyframes = TrackedKeyframes{};
+    std::string resumed_from;
+    impl_->tracking_blocked =
+        StartTrackingOnStoredMap(impl_->odometry.get(), &resumed_from).message;
+  }
+  if (started != nullptr) {
+    *started = SessionSummary{};
+    started->session = begun;
+  }
+  return ServiceStatus::Ok();
+}
+
+ServiceStatus MapServer::ListSessions(std::vector<SessionSummary>* sessions,
+                                      SessionId* current) const {
+  StoredSession now;
+  {
+    std::lock_guard<std::mutex> lock(impl_->session_mutex);
+    now = impl_->session;
+  }
+  std::string why;
+  if (!impl_->store->ListSessions(sessions, &why)) return {StatusCode::kInternal, why};
+  const bool stored = std::any_of(sessions->begin(), sessions->end(), [&](const SessionSummary& s) {
+    return s.session.id == now.id;
+  });
+  if (!stored) {
+    SessionSummary& summary = sessions->emplace_back();
+    summary.session = now;
+  }
+  if (current != nullptr) *current = now.id;
+  return ServiceStatus::Ok();
+}
+
+ServiceStatus MapServer::NewestKeyframe(RgbdFrame* frame) const {
+  KeyframeId newest = 0;
+  {
+    std::lock_guard<std::mutex> lock(impl_->known_mutex);
+    if (impl_->known_keyframes.empty()) return ServiceStatus::NotFound("the map has no keyframe");
+    newest = *impl_->known_keyframes.rbegin();
+  }
+  return StoredFrame(newest, frame);
+}
+
+ServiceStatus MapServer::StoredFrame(KeyframeId id, RgbdFrame* frame) const {
+  {
+    std::lock_guard<std::mutex> lock(impl_->known_mutex);
+    if (impl_->known_keyframes.count(id) == 0) {
+      return ServiceStatus::NotFound("keyframe " + std::to_string(id) + " is not in the map");
+    }
+  }
+  StoredKeyframe stored;
+  std::string why;
+  if (!impl_->store->LoadKeyframe(id, &stored, &why)) return {StatusCode::kInternal, why};
+  *frame = RgbdFrame();
+  frame->stamp_s = stored.stamp_s;
+  frame->name = "stored keyframe " + std::to_string(id);
+  frame->intrinsics = stored.intrinsics;
+  frame->T_W_C = stored.T_W_C;
+  frame->color = std::move(stored.color);
+  frame->depth.width = stored.intrinsics.width;
+  frame->depth.height = stored.intrinsics.height;
+  frame->depth.depth_m.reserve(stored.depth_mm.size());
+  for (const std::uint16_t mm : stored.depth_mm) frame->depth.depth_m.push_back(mm * 0.001f);
+  return ServiceStatus::Ok();
+}
+
+ServiceStatus MapServer::StartTrackingOnStoredMap(RgbdOdometry* odometry,
+                                                  std::string* resumed_from) const {
+  std::vector<KeyframeId> ids;
+  {
+    std::lock_guard<std::mutex> lock(impl_->known_mutex);
+    ids.assign(impl_->known_keyframes.begin(), impl_->known_keyframes.end());
+  }
+  if (ids.empty()) return ServiceStatus::Ok();
+  const auto limit = static_cast<std::size_t>(impl_->config.relocalisation_map_keyframes);
+  if (limit > 0 && ids.size() > limit) {
+    ids.erase(ids.begin(), ids.end() - static_cast<std::ptrdiff_t>(limit));
+  }
+  std::string newest, last_failure;
+  for (const KeyframeId id : ids) {
+    RgbdFrame frame;
+    const ServiceStatus loaded = StoredFrame(id, &frame);
+    if (!loaded.ok()) {
+      return {StatusCode::kFailedPrecondition,
+              "tracking cannot resume on the stored map: " + loaded.message};
+    }
+    // A keyframe without colour or texture is left out: the others place the camera.
+    std::string why;
+    if (odometry->AddMapKeyframe(frame, &why)) {
+      newest = frame.name;
+    } else {
+      last_failure = frame.name + ": " + why;
+    }
+  }
+  if (newest.empty()) {
+    return {StatusCode::kFailedPrecondition,
+            "tracking cannot resume on the stored map (no stored keyframe can be tracked from; " +
+                last_failure + ")"};
+  }
+  *resumed_from = newest;
+  return ServiceStatus::Ok();
+}
+
+}  // namespace objmap
