@@ -43,6 +43,8 @@ int RunUpdatePosesCommand(int argc, char** argv);
 
 /// `objmap keyframes`: stored keyframes and their current poses, in the poses-file format.
 int RunKeyframesCommand(int argc, char** argv);
+/// `objmap sessions`: the map's sessions; `--start NAME` opens a new one.
+int RunSessionsCommand(int argc, char** argv);
 /// `objmap status`: map version, counts, queue, regeneration, database.
 int RunStatusCommand(int argc, char** argv);
 

@@ -32,7 +32,11 @@ constexpr char kIngestUsage[] =
     "  --jpeg                    send colour as JPEG (default: lossless PNG)\n"
     "  --stop-on-error           stop at the first unreadable frame instead of skipping it\n"
     "  --resume                  skip the keyframes the server already holds (by name): goes on\n"
-    "                            after a run that a server crash or restart cut short\n";
+    "                            after a run that a server crash or restart cut short\n"
+    "  --session NAME            start a new session named NAME first (a new run into the same\n"
+    "                            map; with estimated poses the server places its first keyframe\n"
+    "                            in the saved map by relocalisation); without it the keyframes\n"
+    "                            join the server's current session\n";
 
 constexpr char kCommand[] = "ingest";
 
@@ -213,7 +217,8 @@ int Ingest(MapClient* client, const SequenceReader& reader, Detector* detections
 int RunIngestCommand(int argc, char** argv) {
   Arguments args(argc, argv,
                  WithServerFlags({"--detections", "--min-translation", "--min-rotation",
-                                  "--first-frame", "--max-frames", "--max-keyframes"}),
+                                  "--first-frame", "--max-frames", "--max-keyframes",
+                                  "--session"}),
                  {"--every-frame", "--jpeg", "--stop-on-error", "--resume", "--help"});
   const std::string usage = std::string(kIngestUsage) + kServerOptionsUsage;
   if (args.Has("--help")) {
@@ -234,6 +239,15 @@ int RunIngestCommand(int argc, char** argv) {
   v1::StatusResponse before;
   const grpc::Status status = client->Status(v1::StatusRequest(), &before);
   if (!status.ok()) return FailWithStatus(kCommand, status);
+  if (args.Has("--session")) {
+    v1::StartSessionRequest request;
+    request.set_name(args.Get("--session", ""));
+    v1::Session started;
+    const grpc::Status session = client->StartSession(request, &started);
+    if (!session.ok()) return FailWithStatus(kCommand, session);
+    std::cout << "started session " << started.id() << " \"" << started.name() << "\""
+              << std::endl;
+  }
   std::cout << "ingesting " << reader->Describe() << " into " << client->address()
             << " (map version " << before.map_version() << ", " << before.keyframes()
             << " keyframes); detections from "

@@ -32,6 +32,7 @@ void PrintUsage(std::ostream& out) {
          "  objmap export --octomap f.bt --objects dir/  OctoMap and object models as files\n"
          "  objmap update-poses <poses.txt> [--wait]     corrected keyframe poses\n"
          "  objmap keyframes [--out poses.txt]           keyframe poses (update-poses format)\n"
+         "  objmap sessions [--start NAME] [--json]      the map's sessions; start a new one\n"
          "  objmap status                                map version, counts, queue\n"
 #endif
          "  objmap --version                             version and the build's options\n"
@@ -53,6 +54,7 @@ const std::map<std::string, Command>& Commands() {
       {"free", objmap::cli::RunFreeCommand},
       {"export", objmap::cli::RunExportCommand},
       {"keyframes", objmap::cli::RunKeyframesCommand},
+      {"sessions", objmap::cli::RunSessionsCommand},
       {"update-poses", objmap::cli::RunUpdatePosesCommand},
       {"status", objmap::cli::RunStatusCommand},
 #endif

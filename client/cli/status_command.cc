@@ -78,6 +78,8 @@ int RunStatusCommand(int argc, char** argv) {
   std::cout << "server:        " << client->address() << "\n"
             << "map version:   " << status.map_version() << "\n"
             << "keyframes:     " << status.keyframes() << "\n"
+            << "session:       " << status.session_id() << " \"" << status.session_name()
+            << "\"\n"
             << "objects:       " << status.objects() << " (" << status.confirmed_objects()
             << " in the inventory)\n"
             << "ingest queue:  " << status.ingest_queue() << "\n"

@@ -137,6 +137,16 @@ grpc::Status MapClient::ListKeyframes(const v1::ListKeyframesRequest& request,
   return Call(&Stub::ListKeyframes, request, response);
 }
 
+grpc::Status MapClient::StartSession(const v1::StartSessionRequest& request,
+                                     v1::Session* response) {
+  return Call(&Stub::StartSession, request, response);
+}
+
+grpc::Status MapClient::ListSessions(const v1::ListSessionsRequest& request,
+                                     v1::ListSessionsResponse* response) {
+  return Call(&Stub::ListSessions, request, response);
+}
+
 grpc::Status MapClient::QueryObjects(const v1::QueryObjectsRequest& request,
                                      v1::QueryObjectsResponse* response) {
   return Call(&Stub::QueryObjects, request, response);

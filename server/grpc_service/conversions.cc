@@ -194,6 +194,23 @@ void InventoryEntryToProto(const InventoryEntry& entry, v1::InventoryEntry* prot
   proto->mutable_object_ids()->Add(entry.objects.begin(), entry.objects.end());
 }
 
+void SessionToProto(const SessionSummary& summary, bool current, v1::Session* proto) {
+  const StoredSession& session = summary.session;
+  proto->set_id(session.id);
+  proto->set_name(session.name);
+  proto->set_pose_source(session.pose_source);
+  proto->set_has_started(session.started_s.has_value());
+  proto->set_started_s(session.started_s.value_or(0.0));
+  proto->set_has_ended(session.ended_s.has_value());
+  proto->set_ended_s(session.ended_s.value_or(0.0));
+  proto->set_keyframes(static_cast<std::int64_t>(summary.keyframes));
+  proto->set_first_keyframe_id(summary.first_keyframe);
+  proto->set_last_keyframe_id(summary.last_keyframe);
+  proto->set_first_stamp(summary.first_stamp_s);
+  proto->set_last_stamp(summary.last_stamp_s);
+  proto->set_current(current);
+}
+
 void MapChangeToProto(const MapChange& change, v1::MapChange* proto) {
   proto->set_map_version(change.version);
   proto->set_kind(change.kind == MapChange::Kind::kKeyframeAdded ? v1::MapChange::KEYFRAME_ADDED

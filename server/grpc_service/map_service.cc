@@ -59,6 +59,8 @@ void OutcomeToProto(const AddKeyframeOutcome& outcome, v1::AddKeyframeResponse* 
   response->set_detections_used(outcome.detections_used);
   *response->mutable_t_w_c() = PoseToProto(outcome.T_W_C);
   response->set_loops_closed(outcome.loops_closed);
+  response->set_relocalized(outcome.relocalized);
+  response->set_session_id(outcome.session_id);
   response->mutable_created_objects()->Add(outcome.created.begin(), outcome.created.end());
   response->mutable_updated_objects()->Add(outcome.updated.begin(), outcome.updated.end());
   response->mutable_removed_objects()->Add(outcome.removed.begin(), outcome.removed.end());
@@ -164,6 +166,8 @@ void MapServiceImpl::RegisterMethods() {
           this)));
   AddUnary("UpdatePoses", true, &MapServiceImpl::UpdatePoses);
   AddUnary("ListKeyframes", false, &MapServiceImpl::ListKeyframes);
+  AddUnary("StartSession", true, &MapServiceImpl::StartSession);
+  AddUnary("ListSessions", false, &MapServiceImpl::ListSessions);
   AddUnary("QueryObjects", false, &MapServiceImpl::QueryObjects);
   AddUnary("GetObject", false, &MapServiceImpl::GetObject);
   AddUnary("Inventory", false, &MapServiceImpl::Inventory);
@@ -301,6 +305,8 @@ grpc::Status MapServiceImpl::Status(grpc::ServerContext* /*context*/,
     response->set_startup_keyframes_integrated(status.startup_keyframes_integrated);
     response->set_occupancy_bytes(status.occupancy_bytes);
     response->set_occupancy_copies(status.occupancy_copies);
+    response->set_session_id(status.session_id);
+    response->set_session_name(status.session_name);
     return grpc::Status::OK;
   });
 }

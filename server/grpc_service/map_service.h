@@ -49,6 +49,10 @@ class MapServiceImpl final : public grpc::Service {
   grpc::Status ListKeyframes(grpc::ServerContext* context,
                              const v1::ListKeyframesRequest* request,
                              v1::ListKeyframesResponse* response);
+  grpc::Status StartSession(grpc::ServerContext* context, const v1::StartSessionRequest* request,
+                            v1::Session* response);
+  grpc::Status ListSessions(grpc::ServerContext* context, const v1::ListSessionsRequest* request,
+                            v1::ListSessionsResponse* response);
 
   grpc::Status QueryObjects(grpc::ServerContext* context, const v1::QueryObjectsRequest* request,
                             v1::QueryObjectsResponse* response);

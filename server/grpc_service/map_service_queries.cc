@@ -69,7 +69,35 @@ grpc::Status MapServiceImpl::ListKeyframes(grpc::ServerContext* /*context*/,
       info->set_stamp(keyframe.stamp_s);
       info->set_name(keyframe.name);
       *info->mutable_t_w_c() = PoseToProto(keyframe.T_W_C);
+      info->set_session_id(keyframe.session_id);
     }
+    return status;
+  });
+}
+
+grpc::Status MapServiceImpl::StartSession(grpc::ServerContext* /*context*/,
+                                          const v1::StartSessionRequest* request,
+                                          v1::Session* response) {
+  return Guarded("StartSession", [&] {
+    SessionSummary started;
+    const grpc::Status status = ToGrpcStatus(server_.StartSession(request->name(), &started));
+    if (status.ok()) SessionToProto(started, /*current=*/true, response);
+    return status;
+  });
+}
+
+grpc::Status MapServiceImpl::ListSessions(grpc::ServerContext* /*context*/,
+                                          const v1::ListSessionsRequest* /*request*/,
+                                          v1::ListSessionsResponse* response) {
+  return Guarded("ListSessions", [&] {
+    std::vector<SessionSummary> sessions;
+    SessionId current = 0;
+    const grpc::Status status = ToGrpcStatus(server_.ListSessions(&sessions, &current));
+    if (!status.ok()) return status;
+    for (const SessionSummary& session : sessions) {
+      SessionToProto(session, session.session.id == current, response->add_sessions());
+    }
+    response->set_current_session_id(current);
     return status;
   });
 }

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <mutex>
 #include <random>
 #include <set>
@@ -167,6 +168,76 @@ TEST(IngestResume, ARunCutShortGoesOnWithoutDuplicates) {
   EXPECT_NE(run.output.find("3 already held"), std::string::npos) << run.output;
   EXPECT_EQ(KeyframeNames(server->address()), expected);
   server.reset();
+  fs::remove_all(dir);
+}
+
+// Sessions through the real server and the CLI: a run, a kill -9, a restart and a named run:
+// both runs are listed with their keyframes, the killed one without an end, and nothing is lost.
+TEST(Sessions, ARunAKillARestartAndANamedRunAreListedByTheCliAndTheFile) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("objmap_sessions_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string scene = RenderDesk(dir, 40);
+  const std::string inputs = " " + scene + " --detections " + scene + "/detections.json";
+  const std::string db = (dir / "map.db").string(), log = (dir / "server.log").string();
+  const std::vector<std::string> flags = {"--no-detector"};
+  std::string why;
+
+  auto server = std::make_unique<testing::ServerProcess>(OBJMAP_SERVER_PATH, db, log, flags);
+  ASSERT_TRUE(server->Start(std::chrono::seconds(60), &why)) << why;
+  testing::CommandResult run =
+      testing::RunObjmap("ingest" + inputs + " --max-frames 20 --server " + server->address());
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const std::size_t first_run = KeyframeNames(server->address()).size();
+  ASSERT_GE(first_run, 2u);
+  server->Kill(SIGKILL);
+
+  server = std::make_unique<testing::ServerProcess>(OBJMAP_SERVER_PATH, db, log, flags);
+  ASSERT_TRUE(server->Start(std::chrono::seconds(60), &why)) << why << "\n" << server->Log();
+  // The restart opened session 2; nothing was mapped in it, so the named run takes its id.
+  run = testing::RunObjmap("ingest" + inputs + " --first-frame 20 --session 'second run' --server " +
+                           server->address());
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("started session 2 \"second run\""), std::string::npos) << run.output;
+  const std::size_t both_runs = KeyframeNames(server->address()).size();
+  ASSERT_GT(both_runs, first_run);
+
+  run = testing::RunObjmap("sessions --json --server " + server->address());
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const nlohmann::json listed = nlohmann::json::parse(run.output.substr(run.output.find('{')));
+  ASSERT_EQ(listed["sessions"].size(), 2u) << listed.dump(2);
+  EXPECT_EQ(listed["current_session_id"], 2);
+  const nlohmann::json& killed = listed["sessions"][0];
+  const nlohmann::json& named = listed["sessions"][1];
+  EXPECT_EQ(killed["name"], "session 1");
+  EXPECT_EQ(killed["keyframes"], first_run);
+  EXPECT_TRUE(killed["ended_s"].is_null()) << "a killed run has no end";
+  EXPECT_EQ(named["name"], "second run");
+  EXPECT_EQ(named["keyframes"], both_runs - first_run);
+  EXPECT_EQ(named["current"], true);
+  EXPECT_EQ(named["first_keyframe_id"], first_run + 1);
+
+  run = testing::RunObjmap("sessions --server " + server->address());
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("second run"), std::string::npos) << run.output;
+  run = testing::RunObjmap("status --server " + server->address());
+  EXPECT_NE(run.output.find("second run"), std::string::npos) << run.output;
+  run = testing::RunObjmap("sessions --start " + std::string(300, 'x') + " --server " +
+                           server->address());
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("INVALID_ARGUMENT"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("300 bytes, at most 200"), std::string::npos) << run.output;
+  run = testing::RunObjmap("sessions --start evening --server " + server->address());
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("started session 3 \"evening\""), std::string::npos) << run.output;
+  server->Kill(SIGTERM);  // a clean stop stores the end of session 2 (and nothing of empty 3)
+  server.reset();
+
+  EXPECT_EQ(Query(db, "SELECT count(*) FROM sessions")[0], "2");
+  EXPECT_EQ(Query(db, "SELECT count(*) FROM keyframes WHERE session_id = 2")[0],
+            std::to_string(both_runs - first_run));
+  EXPECT_EQ(Query(db, "SELECT ended_s IS NOT NULL FROM sessions WHERE id = 2")[0], "1");
   fs::remove_all(dir);
 }
 

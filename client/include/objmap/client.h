@@ -81,6 +81,9 @@ class MapClient {
                            v1::UpdatePosesResponse* response);
   grpc::Status ListKeyframes(const v1::ListKeyframesRequest& request,
                              v1::ListKeyframesResponse* response);
+  grpc::Status StartSession(const v1::StartSessionRequest& request, v1::Session* response);
+  grpc::Status ListSessions(const v1::ListSessionsRequest& request,
+                            v1::ListSessionsResponse* response);
   grpc::Status QueryObjects(const v1::QueryObjectsRequest& request,
                             v1::QueryObjectsResponse* response);
   grpc::Status GetObject(const v1::GetObjectRequest& request, v1::Object* response);
