@@ -10,8 +10,6 @@
 #include <iostream>
 #include <map>
 #include <memory>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 #include <set>
 
 #include "arguments.h"
@@ -21,7 +19,9 @@
 #include "detection/detections_file.h"
 #include "detection/model_location.h"
 #include "evaluation/trajectory_evaluation.h"
+#include "map_folder.h"
 #include "map_inputs.h"
+#include "map_run_outputs.h"
 #include "mapper/map_export.h"
 #include "pipeline/sequence_runner.h"
 #include "poses_file.h"
@@ -35,6 +35,7 @@ constexpr char kMapUsage[] =
     "objmap map: builds an object map (OctoMap + objects with classes) from an RGB-D sequence,\n"
     "recording or live camera, locally, without a server.\n"
     "usage: objmap map <input> --out <dir> [options]\n"
+    "       objmap map <input> --map <dir> [--session NAME] [options]\n"
     "       objmap map --print-config [--config FILE] [--set SECTION.KEY=V ...]\n"
     "  <input>                   7-Scenes folder (frame-NNNNNN.*) or TUM RGB-D folder;\n"
     "                            openni2 | openni2:<device-uri>: a live OpenNI2 camera (runs\n"
@@ -45,6 +46,12 @@ constexpr char kMapUsage[] =
     "                            each colour stamp; topics left unset are auto-detected\n"
     "  --out DIR                 output folder: map.bt, objects.json, objects/*.ply, timings.csv\n"
     "                            keyframes.txt, keyframes/<id>.jpg (what `objmap view` shows)\n"
+    "  --map DIR                 instead of --out: add this run to the map in DIR (its map.db,\n"
+    "                            the store objmap_server keeps; created when missing) as a new\n"
+    "                            session, then write DIR's files again from the whole map. With\n"
+    "                            estimated poses the session may start anywhere in the saved\n"
+    "                            map: its first keyframe is placed by relocalisation\n"
+    "  --session NAME            --map: the new session's name (default: session N)\n"
     "  --config FILE             objmap's configuration file, the same as objmap_server --config\n"
     "                            and objmap_node's parameters (every key with its default:\n"
     "                            PREFIX/share/objmap/objmap.example.yaml); the flags below win\n"
@@ -119,62 +126,6 @@ class InterruptibleStream : public FrameStream {
   FrameStream* inner_;
   void (*previous_)(int) = SIG_DFL;
 };
-
-// Wraps a detector and keeps what it found per frame, for --save-detections.
-class RecordingDetector : public Detector {
- public:
-  explicit RecordingDetector(std::unique_ptr<Detector> inner) : inner_(std::move(inner)) {}
-  bool Detect(const RgbdFrame& frame, std::vector<Detection>* detections,
-              std::string* why) override {
-    if (!inner_->Detect(frame, detections, why)) return false;
-    recorded_[frame.name] = *detections;
-    // The detector sees every keyframe's colour image, and only those: kept as JPEG (about
-    // 50 kB each) for the map folder's keyframes/, which the viewer crops detections from.
-    if (!frame.color.empty()) {
-      const cv::Mat rgb(frame.color.height, frame.color.width, CV_8UC3,
-                        const_cast<std::uint8_t*>(frame.color.rgb.data()));
-      cv::Mat bgr;
-      cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
-      std::vector<std::uint8_t>& jpeg = keyframe_jpegs_[frame.frame_index];
-      if (!cv::imencode(".jpg", bgr, jpeg, {cv::IMWRITE_JPEG_QUALITY, 85})) {
-        keyframe_jpegs_.erase(frame.frame_index);
-      }
-    }
-    return true;
-  }
-  std::string Name() const override { return inner_->Name(); }
-  const DetectionsByFrame& recorded() const { return recorded_; }
-  /// Frame index -> the JPEG of its colour image.
-  const std::map<std::int64_t, std::vector<std::uint8_t>>& keyframe_jpegs() const {
-    return keyframe_jpegs_;
-  }
-
- private:
-  std::unique_ptr<Detector> inner_;
-  DetectionsByFrame recorded_;
-  std::map<std::int64_t, std::vector<std::uint8_t>> keyframe_jpegs_;
-};
-
-// keyframes/<keyframe id>.jpg: the colour image of each mapped keyframe.
-bool WriteKeyframeImages(const SequenceRunReport& report,
-                         const std::map<std::int64_t, std::vector<std::uint8_t>>& jpegs,
-                         const std::string& dir, std::string* why) {
-  std::error_code error;
-  std::filesystem::create_directories(dir, error);
-  for (const KeyframeReport& keyframe : report.keyframes) {
-    const auto it = jpegs.find(static_cast<std::int64_t>(keyframe.frame_index));
-    if (it == jpegs.end()) continue;
-    const std::string path = dir + "/" + std::to_string(keyframe.result.keyframe_id) + ".jpg";
-    std::ofstream out(path, std::ios::binary);
-    out.write(reinterpret_cast<const char*>(it->second.data()),
-              static_cast<std::streamsize>(it->second.size()));
-    if (!out) {
-      *why = path + ": write failed";
-      return false;
-    }
-  }
-  return true;
-}
 
 std::unique_ptr<Detector> MakeDetector(Arguments& args, const CenterNetConfig& configured,
                                        std::string* why) {
@@ -267,18 +218,6 @@ bool WriteKeyframePoses(const SequenceRunReport& report, const Mapper& mapper,
     return false;
   }
   return true;
-}
-
-bool WriteTimings(const SequenceRunReport& report, const std::string& path, std::string* why) {
-  std::ofstream out(path);
-  out << "frame,detection_ms,segmentation_ms,association_ms,occupancy_ms,detections,used\n";
-  for (const KeyframeReport& k : report.keyframes) {
-    out << k.frame_index << "," << k.detection_ms << "," << k.result.timings.segmentation_ms << ","
-        << k.result.timings.association_ms << "," << k.result.timings.occupancy_ms << ","
-        << k.detections << "," << k.result.detections_used << "\n";
-  }
-  if (!out) *why = path + ": write failed";
-  return static_cast<bool>(out);
 }
 
 // The configuration: the defaults, then --config FILE, then --set keys, then the other flags.
@@ -522,7 +461,7 @@ int RunMapCommand(int argc, char** argv) {
        "--score-threshold", "--first-frame", "--max-frames", "--min-translation", "--min-rotation",
        "--every-nth-frame", "--min-observations", "--min-confidence", "--min-evidence",
        "--corrected-poses", "--trajectory", "--trajectory-tolerance", "--poses",
-       "--object-constraints"});
+       "--object-constraints", "--map", "--session"});
   flags_with_value.merge(MapBagFlags());
   Arguments args(static_cast<int>(words.size()), words.data(), flags_with_value,
                  {"--every-frame", "--stop-on-error", "--print-config", "--help"});
@@ -541,14 +480,29 @@ int RunMapCommand(int argc, char** argv) {
   // Nothing queries this map while it is made: one OctoMap copy is enough.
   mapper_config.occupancy_second_copy = false;
   SequenceRunConfig run_config = RunConfigFrom(args, objmap_config);
-  const MapInputOptions input_options = InputOptionsFrom(args, run_config);
+  MapInputOptions input_options = InputOptionsFrom(args, run_config);
+  // --map: the map server tracks the frames itself (its odometry knows the saved map), so the
+  // input is read with its own poses and the choice of estimating is made below.
+  const bool estimate_flag = input_options.estimate_poses;
+  const bool estimate_missing_flag = input_options.estimate_missing_poses;
+  if (args.Has("--map")) {
+    input_options.estimate_poses = false;
+    input_options.estimate_missing_poses = false;
+  }
   const std::string object_constraints_flag = args.Get("--object-constraints", "off");
   if (object_constraints_flag != "on" && object_constraints_flag != "off") {
     args.SetError("--object-constraints must be on or off, not " + object_constraints_flag);
   }
   const bool object_constraints = object_constraints_flag == "on";
   const ObjectConstraintConfig object_constraint_config;
-  if (!args.error().empty() || args.positional().size() != 1 || !args.Has("--out")) {
+  const bool into_map_folder = args.Has("--map");
+  if (into_map_folder && args.Has("--out")) args.SetError("--out and --map exclude each other");
+  if (into_map_folder && (args.Has("--corrected-poses") || object_constraints)) {
+    args.SetError("--map keeps the map in its store: correct poses with objmap_server and "
+                  "`objmap update-poses`, not --corrected-poses or --object-constraints");
+  }
+  if (!args.error().empty() || args.positional().size() != 1 ||
+      !(args.Has("--out") || into_map_folder)) {
     std::cerr << (args.error().empty() ? "" : args.error() + "\n") << kMapUsage << kMapBagUsage;
     return 2;
   }
@@ -562,6 +516,30 @@ int RunMapCommand(int argc, char** argv) {
   auto detector = MakeDetector(args, objmap_config.detector, &why);
   if (!detector) return Fail(why);
   auto recorder = std::make_unique<RecordingDetector>(std::move(detector));
+  if (into_map_folder) {
+    MapFolderRun folder;
+    folder.dir = args.Get("--map", "");
+    folder.session_name = args.Get("--session", "");
+    folder.server = objmap_config.map_server;
+    const bool estimate = estimate_flag || (estimate_missing_flag && !input.source_has_poses);
+    folder.server.pose_source = estimate ? PoseSource::kEstimate : PoseSource::kRequest;
+    folder.source_has_poses = input.source_has_poses;
+    folder.run = run_config;
+    // Without poses of its own the input cannot pick keyframes by motion (the server tracks
+    // them later): every 10th frame, a third of a second at 30 Hz, unless configured.
+    if (estimate && !input.source_has_poses && folder.run.keyframes.every_nth_frame == 0) {
+      folder.run.keyframes.every_nth_frame = 10;
+    }
+    std::cout << "mapping " << input.stream->Describe() << " with the " << recorder->Name()
+              << " detector\n";
+    InterruptibleStream stream(input.stream.get());
+    const int code = RunIntoMapFolder(folder, &stream, recorder.get());
+    if (args.Has("--save-detections") &&
+        !WriteDetectionsFile(args.Get("--save-detections", ""), recorder->recorded(), &why)) {
+      return Fail(why);
+    }
+    return code;
+  }
   std::cout << "mapping " << input.stream->Describe() << " with the " << recorder->Name()
             << " detector\n";
   if (!input.note.empty()) std::cout << input.note << "\n";

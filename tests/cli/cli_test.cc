@@ -115,6 +115,59 @@ TEST_F(CliScene, MapsAndWritesEveryOutput) {
   EXPECT_EQ(ply_files, 2);
 }
 
+// Two runs into one map folder: the second is a new session of the same map (its keyframes
+// join the first run's objects), and the folder's files are the whole map's.
+TEST_F(CliScene, RunsIntoAMapFolderAreSessionsOfOneMap) {
+  const std::string common = "map " + (dir_ / "seq").string() + " --map " + Path("folder") +
+                             " --detections " + Path("detections.json") +
+                             " --every-frame --min-observations 3 --max-frames 2";
+  CommandResult run = RunObjmap(common);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("a new map in " + Path("folder")), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("session 1: 2 keyframes mapped of 2 frames read"), std::string::npos)
+      << run.output;
+  std::ifstream first_json(Path("folder/objects.json"));
+  // Two views each: below --min-observations 3, nothing is in the inventory yet.
+  EXPECT_EQ(nlohmann::json::parse(first_json)["inventory"].size(), 0u);
+
+  run = RunObjmap(common + " --first-frame 2 --session 'second visit'");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("adding to the map in " + Path("folder") + " (2 keyframes, "),
+            std::string::npos)
+      << run.output;
+  EXPECT_NE(run.output.find("session 2 \"second visit\", poses request"), std::string::npos)
+      << run.output;
+  EXPECT_NE(run.output.find("the map: 4 keyframes, "), std::string::npos) << run.output;
+  std::ifstream json_file(Path("folder/objects.json"));
+  const nlohmann::json objects = nlohmann::json::parse(json_file);
+  ASSERT_EQ(objects["inventory"].size(), 1u) << objects.dump(2);
+  EXPECT_EQ(objects["inventory"][0]["class"], "cup");
+  EXPECT_EQ(objects["inventory"][0]["count"], 2);
+  EXPECT_TRUE(fs::exists(Path("folder/map.bt")));
+  EXPECT_TRUE(fs::exists(Path("folder/map.db")));
+  std::ifstream keyframes(Path("folder/keyframes.txt"));
+  std::string line;
+  std::vector<std::string> sessions;
+  while (std::getline(keyframes, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    sessions.push_back(line.substr(line.rfind("session")));
+  }
+  EXPECT_EQ(sessions, (std::vector<std::string>{"session 1", "session 1", "session 2",
+                                                "session 2"}));
+  for (int id = 1; id <= 4; ++id) {
+    EXPECT_TRUE(fs::exists(Path("folder/keyframes/" + std::to_string(id) + ".jpg"))) << id;
+  }
+
+  run = RunObjmap(common + " --out " + Path("o"));
+  EXPECT_EQ(run.exit_code, 2) << run.output;
+  EXPECT_NE(run.output.find("--out and --map exclude each other"), std::string::npos)
+      << run.output;
+  run = RunObjmap(common + " --session " + std::string(300, 'x'));
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("--session: name: 300 bytes, at most 200"), std::string::npos)
+      << run.output;
+}
+
 TEST_F(CliScene, BadFramesAreSkippedWithTheirFileNamedOrStopTheRun) {
   std::ofstream(Seq("frame-000001.color.png")) << "not an image";
   std::ofstream(Seq("frame-000002.pose.txt")) << "1 0 0 nan\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";

@@ -98,6 +98,11 @@ bool WriteMapOutputs(const Mapper& mapper, const std::string& out_dir, std::stri
     *why = json_path + ": write failed";
     return false;
   }
+  // A folder written again (a run added to a map folder) keeps no model of an object that has
+  // since been merged, relabelled or dropped from the inventory.
+  for (const fs::directory_entry& entry : fs::directory_iterator(fs::path(out_dir) / "objects")) {
+    if (entry.path().extension() == ".ply") fs::remove(entry.path(), error);
+  }
   for (const MapObject* object : mapper.ConfirmedObjects()) {
     const ColoredPoints model = mapper.objects().ModelPoints(*object);
     const std::string path =

@@ -9,14 +9,21 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 // Maps one frame already read; false with a reason when it cannot be mapped.
-bool MapFrame(const RgbdFrame& frame, Detector* detector, Mapper* mapper, KeyframeReport* report,
-              std::string* why) {
+bool MapFrame(const RgbdFrame& frame, Detector* detector, const KeyframeSink& sink,
+              KeyframeReport* report, std::string* why) {
   std::vector<Detection> detections;
   const auto start = Clock::now();
   if (!detector->Detect(frame, &detections, why)) return false;
   report->detection_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
   report->detections = static_cast<int>(detections.size());
-  return mapper->AddKeyframe(frame, detections, &report->result, why);
+  return sink(frame, detections, &report->result, why);
+}
+
+KeyframeSink MapperSink(Mapper* mapper) {
+  return [mapper](const RgbdFrame& frame, const std::vector<Detection>& detections,
+                  KeyframeResult* result, std::string* why) {
+    return mapper->AddKeyframe(frame, detections, result, why);
+  };
 }
 
 // Frames the run will read when the stream knows its length, else 0.
@@ -57,6 +64,12 @@ double Median(std::vector<double> values) {
 bool RunSequence(FrameStream* stream, Detector* detector, Mapper* mapper,
                  const SequenceRunConfig& config, const ProgressCallback& progress,
                  SequenceRunReport* report, std::string* why) {
+  return RunSequence(stream, detector, MapperSink(mapper), config, progress, report, why);
+}
+
+bool RunSequence(FrameStream* stream, Detector* detector, const KeyframeSink& sink,
+                 const SequenceRunConfig& config, const ProgressCallback& progress,
+                 SequenceRunReport* report, std::string* why) {
   if (!config.IsValid(why)) return false;
   const std::size_t total = ExpectedFrames(*stream, config);
   if (!SkipFrames(stream, config.first_frame, why)) return false;
@@ -75,7 +88,7 @@ bool RunSequence(FrameStream* stream, Detector* detector, Mapper* mapper,
     if (ok && selector.IsKeyframe(frame.T_W_C)) {
       KeyframeReport keyframe;
       keyframe.frame_index = static_cast<std::size_t>(frame.frame_index);
-      ok = MapFrame(frame, detector, mapper, &keyframe, &reason);
+      ok = MapFrame(frame, detector, sink, &keyframe, &reason);
       if (ok) report->keyframes.push_back(std::move(keyframe));
     }
     if (!ok) {

@@ -47,6 +47,19 @@ struct SequenceRunReport {
 /// keyframes so far).
 using ProgressCallback = std::function<void(std::size_t, std::size_t, std::size_t)>;
 
+/// Maps one keyframe with its detections: Mapper::AddKeyframe, or a map server's AddKeyframe
+/// when the run adds to a stored map. False with the reason when the keyframe is not mapped.
+using KeyframeSink = std::function<bool(const RgbdFrame& frame,
+                                        const std::vector<Detection>& detections,
+                                        KeyframeResult* result, std::string* why)>;
+
+/// Runs the frames of `stream` in order until it ends or max_frames were read: keyframe selection
+/// by camera motion, then detection and `sink`. Returns false only when the run stops (bad frame
+/// with stop_on_bad_frame, a failed stream); `why` names the frame and the problem.
+[[nodiscard]] bool RunSequence(FrameStream* stream, Detector* detector, const KeyframeSink& sink,
+                               const SequenceRunConfig& config, const ProgressCallback& progress,
+                               SequenceRunReport* report, std::string* why);
+
 /// Maps the frames of `stream` in order until it ends or max_frames were read: keyframe selection
 /// by camera motion, then detection and Mapper::AddKeyframe. Returns false only when the run
 /// stops (bad frame with stop_on_bad_frame, a failed stream); `why` names the frame and the
