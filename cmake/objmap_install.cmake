@@ -61,7 +61,9 @@ install(FILES ${OBJMAP_EXAMPLE_CONFIG} DESTINATION ${OBJMAP_INSTALL_SHARE_DIR})
 
 # The launch files load the example configuration from the source tree's layout
 # ($(find objmap) is the source folder in a catkin devel space); the installed copies point to
-# the installed one instead.
+# the installed one instead. They wait in the build tree as `*.launch.installed`: roslaunch
+# resolves `roslaunch objmap NAME.launch` by walking the whole package folder, build trees inside
+# it included, and refuses a name it finds twice.
 set(_objmap_source_config "$(find objmap)/server/core/config/objmap.example.yaml")
 set(_objmap_installed_config "$(find objmap)/objmap.example.yaml")
 file(GLOB _objmap_launch_files ${PROJECT_SOURCE_DIR}/launch/*.launch)
@@ -69,10 +71,12 @@ foreach(launch_file ${_objmap_launch_files})
   get_filename_component(name ${launch_file} NAME)
   file(READ ${launch_file} text)
   string(REPLACE "${_objmap_source_config}" "${_objmap_installed_config}" text "${text}")
-  file(WRITE ${PROJECT_BINARY_DIR}/installed_launch/${name} "${text}")
+  file(WRITE ${PROJECT_BINARY_DIR}/installed_launch/${name}.installed "${text}")
+  # A build tree configured by an older objmap holds them under their own name.
+  file(REMOVE ${PROJECT_BINARY_DIR}/installed_launch/${name})
   set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS ${launch_file})
-  install(FILES ${PROJECT_BINARY_DIR}/installed_launch/${name}
-    DESTINATION ${OBJMAP_INSTALL_SHARE_DIR}/launch)
+  install(FILES ${PROJECT_BINARY_DIR}/installed_launch/${name}.installed
+    DESTINATION ${OBJMAP_INSTALL_SHARE_DIR}/launch RENAME ${name})
 endforeach()
 install(FILES ${PROJECT_SOURCE_DIR}/launch/objmap.rviz DESTINATION ${OBJMAP_INSTALL_SHARE_DIR}/launch)
 
