@@ -15,6 +15,7 @@
 #include <objmap_msgs/QueryObjects.h>
 #include <objmap_msgs/QueryOccupancy.h>
 #include <objmap_msgs/RayCast.h>
+#include <objmap_msgs/StartSession.h>
 #include <objmap_msgs/Status.h>
 #include <objmap_msgs/UpdatePoses.h>
 #include <ros/callback_queue.h>
@@ -99,6 +100,8 @@ struct MapNode::Impl {
                   objmap_msgs::GetOctomap::Response& response);
   bool UpdatePoses(objmap_msgs::UpdatePoses::Request& request,
                    objmap_msgs::UpdatePoses::Response& response);
+  bool StartSession(objmap_msgs::StartSession::Request& request,
+                    objmap_msgs::StartSession::Response& response);
   bool Status(objmap_msgs::Status::Request& request, objmap_msgs::Status::Response& response);
 
   // --- publishers (node_publishers.cc)

@@ -49,6 +49,8 @@ void MapNode::Impl::AdvertiseServices() {
       private_node.advertiseService("get_octomap", &MapNode::Impl::GetOctomap, this));
   services.push_back(
       private_node.advertiseService("update_poses", &MapNode::Impl::UpdatePoses, this));
+  services.push_back(
+      private_node.advertiseService("start_session", &MapNode::Impl::StartSession, this));
   services.push_back(private_node.advertiseService("status", &MapNode::Impl::Status, this));
 }
 
@@ -243,6 +245,17 @@ bool MapNode::Impl::UpdatePoses(objmap_msgs::UpdatePoses::Request& request,
   return Answer("update_poses", status, &response);
 }
 
+bool MapNode::Impl::StartSession(objmap_msgs::StartSession::Request& request,
+                                 objmap_msgs::StartSession::Response& response) {
+  SessionSummary started;
+  const ServiceStatus status = server->StartSession(request.name, &started);
+  if (status.ok()) {
+    response.session_id = started.session.id;
+    response.session_name = started.session.name;
+  }
+  return Answer("start_session", status, &response);
+}
+
 bool MapNode::Impl::Status(objmap_msgs::Status::Request& /*request*/,
                            objmap_msgs::Status::Response& response) {
   const ServerStatus status = server->Status();
@@ -256,6 +269,8 @@ bool MapNode::Impl::Status(objmap_msgs::Status::Request& /*request*/,
   response.database = status.database;
   response.database_bytes = status.database_bytes;
   response.uptime_s = status.uptime_s;
+  response.session_id = status.session_id;
+  response.session_name = status.session_name;
   response.frames_received = frames_received;
   response.frames_rejected = frames_rejected;
   response.keyframes_sent = keyframes_sent;

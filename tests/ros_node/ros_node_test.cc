@@ -8,6 +8,7 @@
 #include <objmap_msgs/IsFree.h>
 #include <objmap_msgs/MapChange.h>
 #include <objmap_msgs/QueryObjects.h>
+#include <objmap_msgs/StartSession.h>
 #include <objmap_msgs/Status.h>
 #include <objmap_msgs/UpdatePoses.h>
 #include <ros/ros.h>
@@ -595,6 +596,33 @@ TEST_F(RosNode, UnknownIdsAndBadRequestsGetAnErrorField) {
   EXPECT_TRUE(shared().node->running());
   EXPECT_EQ(NodeStatus().keyframes, kKeyframes);
   EXPECT_EQ(NodeInventory(), GrpcInventory());
+}
+
+TEST_F(RosNode, StartSessionOpensTheSessionTheStatusNamesAndRefusesABadName) {
+  const objmap_msgs::Status::Response before = NodeStatus();
+  ASSERT_TRUE(before.ok) << before.error;
+  EXPECT_GE(before.session_id, 1);
+  EXPECT_FALSE(before.session_name.empty());
+
+  objmap_msgs::StartSession start;
+  start.request.name = "after lunch";
+  ASSERT_TRUE(Call("start_session", &start));
+  ASSERT_TRUE(start.response.ok) << start.response.error;
+  EXPECT_EQ(start.response.session_id, before.session_id + 1);
+  EXPECT_EQ(start.response.session_name, "after lunch");
+  const objmap_msgs::Status::Response after = NodeStatus();
+  EXPECT_EQ(after.session_id, before.session_id + 1);
+  EXPECT_EQ(after.session_name, "after lunch");
+
+  objmap_msgs::StartSession bad;
+  bad.request.name = "two\nlines";
+  ASSERT_TRUE(Call("start_session", &bad));
+  EXPECT_FALSE(bad.response.ok);
+  EXPECT_NE(bad.response.error.find("control characters"), std::string::npos)
+      << bad.response.error;
+  // Refused: the session opened above is still the current one, and the map is whole.
+  EXPECT_EQ(NodeStatus().session_id, before.session_id + 1);
+  EXPECT_EQ(NodeStatus().keyframes, kKeyframes);
 }
 
 TEST_F(RosNode, BadParametersStopTheNodeAtStartWithTheReason) {
