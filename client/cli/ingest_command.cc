@@ -146,8 +146,15 @@ void PrintSummary(const IngestCounts& counts, const v1::IngestSummary& summary, 
     std::cout << " (ids " << summary.first_keyframe_id() << ".." << summary.last_keyframe_id()
               << ")";
   }
-  std::cout << "; skipped frames: " << counts.skipped << "\n"
-            << "objects created: " << summary.objects_created() << "\n"
+  std::cout << "; skipped frames: " << counts.skipped << "\n";
+  if (summary.keyframes_untracked() > 0) {
+    // With estimated poses: keyframes the server could not place, skipped by it.
+    std::cout << "keyframes the server could not place (not mapped; later ones are placed by "
+                 "relocalisation): "
+              << summary.keyframes_untracked() << "\n";
+    for (const std::string& reason : summary.untracked()) std::cerr << "  " << reason << "\n";
+  }
+  std::cout << "objects created: " << summary.objects_created() << "\n"
             << "map version: " << summary.map_version() << "\n"
             << "wall time: " << std::fixed << std::setprecision(1) << wall_s << " s\n";
 }

@@ -226,10 +226,14 @@ grpc::Status MapServiceImpl::IngestKeyframes(grpc::ServerContext* /*context*/,
                                              v1::IngestSummary* summary) {
   return Guarded("IngestKeyframes", [&] {
     grpc::ByteBuffer bytes;
-    int index = 0;
+    // The reasons kept for the untracked keyframes skipped: enough to see a pattern.
+    constexpr int kMaxUntrackedReasons = 100;
+    int index = 0;  // of the message in the stream
+    int added = 0;
+    int untracked = 0;
     int objects_created = 0;
     std::uint64_t map_version = server_.Snapshot()->version;
-    while (reader->Read(&bytes)) {
+    for (; reader->Read(&bytes); ++index) {
       v1::AddKeyframeRequest request;
       const grpc::Status decoded = DecodeRequest(bytes, &request);
       if (!decoded.ok()) {
@@ -238,17 +242,26 @@ grpc::Status MapServiceImpl::IngestKeyframes(grpc::ServerContext* /*context*/,
       }
       AddKeyframeOutcome outcome;
       const grpc::Status status = AddOne(request, &outcome);
+      // A keyframe the server cannot place is skipped: a camera's stream goes on past a blank
+      // wall or a fast turn, and the next keyframe is placed by relocalisation.
+      if (!status.ok() && outcome.untracked) {
+        if (++untracked <= kMaxUntrackedReasons) {
+          summary->add_untracked(StreamPrefix(index, &request) + status.error_message());
+        }
+        continue;
+      }
       if (!status.ok()) {
         return grpc::Status(status.error_code(),
                             StreamPrefix(index, &request) + status.error_message());
       }
-      if (index == 0) summary->set_first_keyframe_id(outcome.keyframe_id);
+      if (added == 0) summary->set_first_keyframe_id(outcome.keyframe_id);
       summary->set_last_keyframe_id(outcome.keyframe_id);
       objects_created += static_cast<int>(outcome.created.size());
       map_version = outcome.map_version;
-      ++index;
+      ++added;
     }
-    summary->set_keyframes_added(index);
+    summary->set_keyframes_untracked(untracked);
+    summary->set_keyframes_added(added);
     summary->set_objects_created(objects_created);
     summary->set_map_version(map_version);
     return grpc::Status::OK;

@@ -101,6 +101,52 @@ class MapServiceTest : public ::testing::Test {
     return request;
   }
 
+  // A frame with nothing to track (one grey, a flat depth), without a pose.
+  v1::AddKeyframeRequest BlankWithoutPose() const {
+    RgbdFrame flat;
+    flat.intrinsics = K_;
+    flat.name = "blank";
+    flat.color = {K_.width, K_.height, std::vector<std::uint8_t>(3u * K_.width * K_.height, 128)};
+    flat.depth = {K_.width, K_.height,
+                  std::vector<float>(static_cast<std::size_t>(K_.width) * K_.height, 1.5f)};
+    v1::AddKeyframeRequest request;
+    std::string why;
+    EXPECT_TRUE(MakeAddKeyframeRequest(flat, nullptr, KeyframeEncoding{}, &request, &why)) << why;
+    request.clear_t_w_c();
+    return request;
+  }
+
+  // A table seen from above its edge, the scene's colours under a pattern of 6 px squares (for
+  // keypoints), without a pose.
+  v1::AddKeyframeRequest TexturedWithoutPose() const {
+    const std::vector<SceneBox> boxes = {{{-0.6, -0.8, 0.60}, {0.6, 0.8, 0.70}, {150, 100, 60}},
+                                         {{1.5, -2.0, 0.0}, {1.6, 2.0, 2.5}, {220, 220, 220}}};
+    RgbdFrame textured = testing::RenderFrame(
+        boxes, K_, testing::LookAt({-1.0, 0.0, 1.3}, Eigen::Vector3d(0, 0, 0.7)), "textured");
+    std::mt19937 random(7);
+    std::uniform_int_distribution<int> shade(40, 255);
+    for (int by = 0; by < K_.height; by += 6) {
+      for (int bx = 0; bx < K_.width; bx += 6) {
+        const int level = shade(random);
+        for (int y = by; y < std::min(by + 6, K_.height); ++y) {
+          for (int x = bx; x < std::min(bx + 6, K_.width); ++x) {
+            for (int c = 0; c < 3; ++c) {
+              std::uint8_t& value =
+                  textured.color.rgb[3u * (static_cast<std::size_t>(y) * K_.width + x) + c];
+              value = static_cast<std::uint8_t>(value * level / 255);
+            }
+          }
+        }
+      }
+    }
+    v1::AddKeyframeRequest request;
+    std::string why;
+    EXPECT_TRUE(MakeAddKeyframeRequest(textured, nullptr, KeyframeEncoding{}, &request, &why))
+        << why;
+    request.clear_t_w_c();
+    return request;
+  }
+
   grpc::Status Add(const v1::AddKeyframeRequest& request, v1::AddKeyframeResponse* response) {
     grpc::ClientContext context;
     return stub_->AddKeyframe(&context, request, response);
@@ -121,48 +167,19 @@ TEST_F(MapServiceTest, AServerThatEstimatesPosesTakesKeyframesWithoutOneAndSaysW
   server_config_.pose_source = PoseSource::kEstimate;
   Start(64);
   // Nothing to track in a blank frame: FAILED_PRECONDITION naming why, and nothing mapped.
-  v1::AddKeyframeRequest blank = Keyframe(0);
-  blank.clear_t_w_c();
-  RgbdFrame flat;
-  flat.intrinsics = K_;
-  flat.color = {K_.width, K_.height, std::vector<std::uint8_t>(3u * K_.width * K_.height, 128)};
-  flat.depth = {K_.width, K_.height, std::vector<float>(static_cast<std::size_t>(K_.width) * K_.height, 1.5f)};
-  std::string why;
-  ASSERT_TRUE(MakeAddKeyframeRequest(flat, nullptr, KeyframeEncoding{}, &blank, &why)) << why;
-  blank.clear_t_w_c();
+  const v1::AddKeyframeRequest blank = BlankWithoutPose();
   v1::AddKeyframeResponse response;
   grpc::Status status = Add(blank, &response);
   EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
   EXPECT_NE(status.error_message().find("tracking lost"), std::string::npos)
       << status.error_message();
   EXPECT_EQ(map_server_->Status().keyframes, 0u);
-  // A textured view (the scene's colours under a pattern of 6 px squares, for keypoints)
-  // without a pose starts the map at its camera.
-  const std::vector<SceneBox> boxes = {{{-0.6, -0.8, 0.60}, {0.6, 0.8, 0.70}, {150, 100, 60}},
-                                       {{1.5, -2.0, 0.0}, {1.6, 2.0, 2.5}, {220, 220, 220}}};
-  RgbdFrame textured = testing::RenderFrame(
-      boxes, K_, testing::LookAt({-1.0, 0.0, 1.3}, Eigen::Vector3d(0, 0, 0.7)), "textured");
-  std::mt19937 random(7);
-  std::uniform_int_distribution<int> shade(40, 255);
-  for (int by = 0; by < K_.height; by += 6) {
-    for (int bx = 0; bx < K_.width; bx += 6) {
-      const int level = shade(random);
-      for (int y = by; y < std::min(by + 6, K_.height); ++y) {
-        for (int x = bx; x < std::min(bx + 6, K_.width); ++x) {
-          for (int c = 0; c < 3; ++c) {
-            std::uint8_t& value = textured.color.rgb[3u * (static_cast<std::size_t>(y) * K_.width + x) + c];
-            value = static_cast<std::uint8_t>(value * level / 255);
-          }
-        }
-      }
-    }
-  }
-  v1::AddKeyframeRequest first;
-  ASSERT_TRUE(MakeAddKeyframeRequest(textured, nullptr, KeyframeEncoding{}, &first, &why)) << why;
-  first.clear_t_w_c();
+  // A textured view without a pose starts the map at its camera.
+  const v1::AddKeyframeRequest first = TexturedWithoutPose();
   status = Add(first, &response);
   ASSERT_TRUE(status.ok()) << status.error_message();
   Eigen::Isometry3d mapped_at;
+  std::string why;
   ASSERT_TRUE(PoseFromProto(response.t_w_c(), &mapped_at, &why)) << why;
   EXPECT_TRUE(mapped_at.isApprox(Eigen::Isometry3d::Identity()));
   // A pose that is there is still checked, even though it would be ignored.
@@ -170,6 +187,45 @@ TEST_F(MapServiceTest, AServerThatEstimatesPosesTakesKeyframesWithoutOneAndSaysW
   nan_pose.mutable_t_w_c()->set_qw(std::nan(""));
   status = Add(nan_pose, &response);
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+}
+
+// A stream of keyframes whose poses the server estimates goes on past a keyframe it cannot
+// place (a robot's stream does not stop at a blank wall): the summary counts and names it.
+TEST_F(MapServiceTest, IngestWithEstimatedPosesSkipsWhatItCannotPlaceAndNamesIt) {
+  Stop();
+  server_config_.pose_source = PoseSource::kEstimate;
+  Start(64);
+  grpc::ClientContext context;
+  v1::IngestSummary summary;
+  auto writer = stub_->IngestKeyframes(&context, &summary);
+  ASSERT_TRUE(writer->Write(BlankWithoutPose()));
+  ASSERT_TRUE(writer->Write(TexturedWithoutPose()));
+  ASSERT_TRUE(writer->Write(BlankWithoutPose()));
+  writer->WritesDone();
+  const grpc::Status status = writer->Finish();
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(summary.keyframes_added(), 1);
+  EXPECT_EQ(summary.first_keyframe_id(), 1);
+  EXPECT_EQ(summary.last_keyframe_id(), 1);
+  EXPECT_EQ(summary.keyframes_untracked(), 2);
+  ASSERT_EQ(summary.untracked_size(), 2);
+  EXPECT_NE(summary.untracked(0).find("keyframe 0 (blank): blank: tracking lost"),
+            std::string::npos)
+      << summary.untracked(0);
+  EXPECT_NE(summary.untracked(1).find("keyframe 2 (blank)"), std::string::npos)
+      << summary.untracked(1);
+  EXPECT_EQ(map_server_->Status().keyframes, 1u);
+
+  // Other refusals still stop the stream, as with given poses.
+  grpc::ClientContext bad_context;
+  v1::IngestSummary bad_summary;
+  auto bad_writer = stub_->IngestKeyframes(&bad_context, &bad_summary);
+  v1::AddKeyframeRequest bad = TexturedWithoutPose();
+  bad.mutable_depth()->set_width(7);
+  ASSERT_TRUE(bad_writer->Write(bad));
+  bad_writer->WritesDone();
+  EXPECT_EQ(bad_writer->Finish().error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(map_server_->Status().keyframes, 1u);
 }
 
 TEST_F(MapServiceTest, AddedKeyframeMakesAQueryableObject) {

@@ -477,6 +477,8 @@ ServiceStatus MapServer::AddKeyframe(RgbdFrame frame,
     }
     tracked = impl_->odometry->Track(frame);
     if (tracked.status == TrackingStatus::kLost) {
+      *outcome = AddKeyframeOutcome{};
+      outcome->untracked = true;
       return {StatusCode::kFailedPrecondition,
               frame.name + ": tracking lost (" + tracked.why +
                   "); the keyframe is not mapped: send one that overlaps the last ones"};

@@ -158,6 +158,9 @@ struct AddKeyframeOutcome {
   /// keyframe (the first of a session on a saved map, or after tracking was lost).
   bool relocalized = false;
   SessionId session_id = 0;  ///< the session it was mapped in
+  /// PoseSource::kEstimate, with kFailedPrecondition: the camera could not be placed (tracking
+  /// lost, no saved keyframe explains the frame); the keyframe is not mapped.
+  bool untracked = false;
 };
 
 struct PoseUpdateOutcome {
