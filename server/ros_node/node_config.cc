@@ -21,13 +21,13 @@ class ParamReader : public ros_bridge::RosParamReader {
 
   using RosParamReader::operator();
 
-  /// request or estimate, as in the YAML file.
+  /// request, estimate or session_frame, as in the YAML file.
   void operator()(const char* key, PoseSource* source) {
     XmlRpc::XmlRpcValue raw;
     if (!Fetch(key, &raw)) return;
     if (raw.getType() != XmlRpc::XmlRpcValue::TypeString ||
         !ParsePoseSource(static_cast<std::string>(raw), source)) {
-      Fail(key, "expected request or estimate, got " + ros_bridge::DescribeParam(raw));
+      Fail(key, "expected request, estimate or session_frame, got " + ros_bridge::DescribeParam(raw));
     }
   }
 

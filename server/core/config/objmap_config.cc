@@ -80,7 +80,7 @@ class Reader {
     const YAML::Node node = Field(key);
     if (!node) return;
     if (!node.IsScalar() || !ParsePoseSource(node.Scalar(), source)) {
-      error_ = section_name_ + "." + key + ": expected request or estimate, got " + Describe(node);
+      error_ = section_name_ + "." + key + ": expected request, estimate or session_frame, got " + Describe(node);
     }
   }
 

@@ -60,7 +60,14 @@ StoreChange AllObjectsChange(const Mapper& mapper) {
 }  // namespace
 
 const char* PoseSourceName(PoseSource source) {
-  return source == PoseSource::kEstimate ? "estimate" : "request";
+  switch (source) {
+    case PoseSource::kEstimate:
+      return "estimate";
+    case PoseSource::kSessionFrame:
+      return "session_frame";
+    default:
+      return "request";
+  }
 }
 
 bool ParsePoseSource(const std::string& name, PoseSource* source) {
@@ -68,6 +75,8 @@ bool ParsePoseSource(const std::string& name, PoseSource* source) {
     *source = PoseSource::kRequest;
   } else if (name == "estimate") {
     *source = PoseSource::kEstimate;
+  } else if (name == "session_frame") {
+    *source = PoseSource::kSessionFrame;
   } else {
     return false;
   }
@@ -95,7 +104,7 @@ bool MapServerConfig::IsValid(std::string* why) const {
     *why = "MapServerConfig.max_query_volume_m3 must be positive";
     return false;
   }
-  if (pose_source == PoseSource::kEstimate && !odometry.IsValid(why)) return false;
+  if (pose_source != PoseSource::kRequest && !odometry.IsValid(why)) return false;
   return true;
 }
 
@@ -162,6 +171,8 @@ std::unique_ptr<MapServer> MapServer::Open(const MapServerConfig& config,
     std::string resumed_from;
     impl.tracking_blocked =
         server->StartTrackingOnStoredMap(impl.odometry.get(), &resumed_from).message;
+  } else if (config.pose_source == PoseSource::kSessionFrame) {
+    impl.ResetSessionFrame(*server);
   }
   // What this start had to integrate, the next one loads.
   impl.MaybeCheckpoint(/*force=*/true);
@@ -464,12 +475,24 @@ ServiceStatus MapServer::AddKeyframe(RgbdFrame frame,
                                      AddKeyframeOutcome* outcome) {
   std::string why;
   std::unique_lock<std::mutex> tracking;
-  if (impl_->odometry) {
+  const bool session_frame = impl_->config.pose_source == PoseSource::kSessionFrame;
+  if (impl_->odometry || session_frame) {
     tracking = std::unique_lock<std::mutex>(impl_->tracking_mutex);
+  }
+  if (impl_->odometry) {
     frame.T_W_C = Eigen::Isometry3d::Identity();  // ours to estimate; only the images are checked
   }
   if (!ValidateFrame(frame, &why)) return ServiceStatus::Invalid(why);
   if (impl_->shutting_down) return {StatusCode::kUnavailable, "the server is shutting down"};
+  bool placed_session_frame = false;
+  if (session_frame) {
+    const ServiceStatus placed = impl_->PlaceInSessionFrame(&frame, &placed_session_frame);
+    if (!placed.ok()) {
+      *outcome = AddKeyframeOutcome{};
+      outcome->untracked = placed.code == StatusCode::kFailedPrecondition;
+      return placed;
+    }
+  }
   TrackingReport tracked;
   if (impl_->odometry) {
     if (!impl_->tracking_blocked.empty()) {
@@ -508,6 +531,7 @@ ServiceStatus MapServer::AddKeyframe(RgbdFrame frame,
   if (!result.status.ok()) return result.status;
   *outcome = std::move(result.keyframe);
   outcome->T_W_C = mapped_pose;
+  outcome->relocalized = placed_session_frame;
   if (!impl_->odometry) return result.status;
   impl_->tracked_keyframes.Add(outcome->keyframe_id, tracked, *impl_->odometry);
   outcome->loops_closed = tracked.loops_closed;

@@ -51,20 +51,26 @@ struct ServiceStatus {
 enum class PoseSource {
   kRequest,   ///< each AddKeyframe's own pose (a SLAM system, TF, a dataset)
   kEstimate,  ///< RGB-D odometry on the keyframes themselves; the request's pose is ignored
+  /// Each AddKeyframe's own pose, in a frame of its session's own (a robot's odometry that starts
+  /// at zero at each boot): the server finds where the session's frame lies in the map by
+  /// relocalising its first keyframes in the saved map, then maps every keyframe of the session
+  /// at that transform times its pose.
+  kSessionFrame,
 };
 
-/// "request" / "estimate" (config files, messages).
+/// "request" / "estimate" / "session_frame" (config files, messages).
 [[nodiscard]] const char* PoseSourceName(PoseSource source);
 /// False for any other name.
 [[nodiscard]] bool ParsePoseSource(const std::string& name, PoseSource* source);
 
 struct MapServerConfig {
   MapperConfig mapper;
-  /// Config key server.pose_source: request (default) or estimate. With kEstimate the server
-  /// tracks the camera from the keyframes (sent in time order, each overlapping the last ones),
-  /// closes loops, and moves the mapped keyframes when a loop closes (as UpdatePoses would).
+  /// Config key server.pose_source: request (default), estimate or session_frame. With kEstimate
+  /// the server tracks the camera from the keyframes (sent in time order, each overlapping the
+  /// last ones), closes loops, and moves the mapped keyframes when a loop closes (as UpdatePoses
+  /// would). With kSessionFrame the requests' poses are in their session's own frame (above).
   PoseSource pose_source = PoseSource::kRequest;
-  OdometryConfig odometry;  ///< with kEstimate
+  OdometryConfig odometry;  ///< with kEstimate, and kSessionFrame's relocalisation
   KeyframeStoreConfig store;
   /// Keyframes and pose updates waiting for the mapping thread; AddKeyframe beyond this answers
   /// kResourceExhausted instead of queueing without bound.
@@ -156,10 +162,12 @@ struct AddKeyframeOutcome {
   int loops_closed = 0;
   /// PoseSource::kEstimate: the camera was placed in the map by relocalisation for this
   /// keyframe (the first of a session on a saved map, or after tracking was lost).
+  /// PoseSource::kSessionFrame: this keyframe placed its session's frame in the map.
   bool relocalized = false;
   SessionId session_id = 0;  ///< the session it was mapped in
   /// PoseSource::kEstimate, with kFailedPrecondition: the camera could not be placed (tracking
-  /// lost, no saved keyframe explains the frame); the keyframe is not mapped.
+  /// lost, no saved keyframe explains the frame); the keyframe is not mapped. The same with
+  /// kSessionFrame while the session's frame is not placed in the map yet.
   bool untracked = false;
 };
 

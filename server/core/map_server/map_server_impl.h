@@ -8,6 +8,7 @@
 #include <deque>
 #include <future>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <thread>
 
@@ -67,6 +68,16 @@ struct MapServer::Impl {
   std::unique_ptr<RgbdOdometry> odometry;
   TrackedKeyframes tracked_keyframes;
   std::string tracking_blocked;  // why tracking cannot resume on the stored map (empty: it can)
+
+  // PoseSource::kSessionFrame (tracking_mutex): a tracker seeded with the stored map that places
+  // the current session's first keyframe, and then where the session's frame lies in the map.
+  std::unique_ptr<RgbdOdometry> session_placer;
+  std::optional<Eigen::Isometry3d> T_map_session;
+  /// A new session: its frame is not placed yet; the placer is seeded with the stored map.
+  void ResetSessionFrame(const MapServer& server);
+  /// Moves `frame`'s pose from its session's frame into the map's, placing the session's frame
+  /// first when needed (`placed_now`); kFailedPrecondition with the reason when it cannot be.
+  ServiceStatus PlaceInSessionFrame(RgbdFrame* frame, bool* placed_now);
 
   // Sessions: the current one (keyframes added now join it) and those ended whose end is not
   // stored yet (written with the next keyframe, or at shutdown). stored_sessions: ids with a

@@ -64,9 +64,13 @@ ServiceStatus MapServer::StartSession(const std::string& name, SessionSummary* s
   std::string why;
   if (!ValidSessionName(name, &why)) return ServiceStatus::Invalid(why);
   if (impl_->shutting_down) return {StatusCode::kUnavailable, "the server is shutting down"};
-  // With estimated poses, no keyframe is being tracked while tracking starts over.
+  // With estimated poses or poses in a session's frame, no keyframe is being placed while
+  // tracking starts over.
+  const bool session_frame = impl_->config.pose_source == PoseSource::kSessionFrame;
   std::unique_lock<std::mutex> tracking;
-  if (impl_->odometry) tracking = std::unique_lock<std::mutex>(impl_->tracking_mutex);
+  if (impl_->odometry || session_frame) {
+    tracking = std::unique_lock<std::mutex>(impl_->tracking_mutex);
+  }
   StoredSession begun;
   {
     std::lock_guard<std::mutex> lock(impl_->session_mutex);
@@ -89,10 +93,48 @@ ServiceStatus MapServer::StartSession(const std::string& name, SessionSummary* s
     impl_->tracking_blocked =
         StartTrackingOnStoredMap(impl_->odometry.get(), &resumed_from).message;
   }
+  if (session_frame) impl_->ResetSessionFrame(*this);
   if (started != nullptr) {
     *started = SessionSummary{};
     started->session = begun;
   }
+  return ServiceStatus::Ok();
+}
+
+void MapServer::Impl::ResetSessionFrame(const MapServer& server) {
+  T_map_session.reset();
+  session_placer = std::make_unique<RgbdOdometry>(config.odometry);
+  std::string resumed_from;
+  tracking_blocked = server.StartTrackingOnStoredMap(session_placer.get(), &resumed_from).message;
+}
+
+ServiceStatus MapServer::Impl::PlaceInSessionFrame(RgbdFrame* frame, bool* placed_now) {
+  *placed_now = false;
+  if (T_map_session) {
+    frame->T_W_C = *T_map_session * frame->T_W_C;
+    return ServiceStatus::Ok();
+  }
+  bool map_empty = false;
+  {
+    std::lock_guard<std::mutex> lock(known_mutex);
+    map_empty = known_keyframes.empty();
+  }
+  // The first session of a map defines the map's frame.
+  if (map_empty) {
+    T_map_session = Eigen::Isometry3d::Identity();
+    return ServiceStatus::Ok();
+  }
+  if (!tracking_blocked.empty()) return {StatusCode::kFailedPrecondition, tracking_blocked};
+  const TrackingReport report = session_placer->Track(*frame);
+  if (report.status == TrackingStatus::kLost) {
+    return {StatusCode::kFailedPrecondition,
+            frame->name + ": its session's frame is not placed in the map yet (" + report.why +
+                "); the session's keyframes are mapped once one of them is placed"};
+  }
+  T_map_session = report.T_W_C * frame->T_W_C.inverse();
+  frame->T_W_C = report.T_W_C;
+  *placed_now = true;
+  session_placer.reset();  // its keyframes' features are not needed until the next session
   return ServiceStatus::Ok();
 }
 
