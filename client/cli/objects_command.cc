@@ -40,12 +40,18 @@ v1::QueryObjectsRequest RequestFrom(Arguments& args) {
 }
 
 void PrintTable(const v1::QueryObjectsResponse& response) {
-  std::printf("%-8s %-16s %10s  %-30s %12s\n", "id", "class", "confidence", "centroid (m)",
-              "observations");
+  std::printf("%-8s %-16s %10s  %-30s %12s  %s\n", "id", "class", "confidence", "centroid (m)",
+              "observations", "seen in sessions");
   for (const v1::Object& object : response.objects()) {
-    std::printf("%-8lld %-16s %10.3f  %-30s %12d\n", static_cast<long long>(object.id()),
+    const std::string sessions =
+        !object.has_first_seen() ? "-"
+        : object.first_seen().session_id() == object.last_seen().session_id()
+            ? std::to_string(object.first_seen().session_id())
+            : std::to_string(object.first_seen().session_id()) + ".." +
+                  std::to_string(object.last_seen().session_id());
+    std::printf("%-8lld %-16s %10.3f  %-30s %12d  %s\n", static_cast<long long>(object.id()),
                 object.class_name().c_str(), object.confidence(),
-                FormatPoint(object.centroid()).c_str(), object.observations());
+                FormatPoint(object.centroid()).c_str(), object.observations(), sessions.c_str());
   }
 }
 

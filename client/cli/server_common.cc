@@ -67,19 +67,30 @@ Json ObjectJson(const v1::Object& object) {
   for (const v1::ClassScore& score : object.scores()) {
     scores.push_back({{"class", score.class_name()}, {"score", Rounded(score.score())}});
   }
-  return {{"id", object.id()},
-          {"class", object.class_name()},
-          {"class_id", object.class_id()},
-          {"confidence", Rounded(object.confidence())},
-          {"centroid", PointJson(object.centroid())},
-          {"bounds",
-           {{"min", PointJson(object.bounds().min())}, {"max", PointJson(object.bounds().max())}}},
-          {"observations", object.observations()},
-          {"keyframes",
-           std::vector<std::int64_t>(object.keyframes().begin(), object.keyframes().end())},
-          {"confirmed", object.confirmed()},
-          {"changed_version", object.changed_version()},
-          {"scores", scores}};
+  Json json = {{"id", object.id()},
+               {"class", object.class_name()},
+               {"class_id", object.class_id()},
+               {"confidence", Rounded(object.confidence())},
+               {"centroid", PointJson(object.centroid())},
+               {"bounds",
+                {{"min", PointJson(object.bounds().min())},
+                 {"max", PointJson(object.bounds().max())}}},
+               {"observations", object.observations()},
+               {"keyframes",
+                std::vector<std::int64_t>(object.keyframes().begin(), object.keyframes().end())},
+               {"confirmed", object.confirmed()},
+               {"changed_version", object.changed_version()},
+               {"scores", scores}};
+  auto seen_json = [](const v1::Seen& seen) {
+    return Json{{"keyframe_id", seen.keyframe_id()},
+                {"session_id", seen.session_id()},
+                {"stamp", seen.stamp()}};
+  };
+  if (object.has_first_seen()) {
+    json["first_seen"] = seen_json(object.first_seen());
+    json["last_seen"] = seen_json(object.last_seen());
+  }
+  return json;
 }
 
 }  // namespace objmap::cli

@@ -183,6 +183,15 @@ void ObjectToProto(const ObjectView& view, bool include_model, v1::Object* objec
   }
   object->set_confirmed(view.confirmed);
   object->set_changed_version(view.changed_version);
+  if (view.first_seen.keyframe_id != 0) {
+    auto seen_to_proto = [](const ObjectSeen& seen, v1::Seen* proto) {
+      proto->set_keyframe_id(seen.keyframe_id);
+      proto->set_session_id(seen.session_id);
+      proto->set_stamp(seen.stamp_s);
+    };
+    seen_to_proto(view.first_seen, object->mutable_first_seen());
+    seen_to_proto(view.last_seen, object->mutable_last_seen());
+  }
   if (include_model && view.model_W) ModelToProto(*view.model_W, object);
 }
 

@@ -246,6 +246,11 @@ TEST_F(MapServiceTest, AddedKeyframeMakesAQueryableObject) {
   EXPECT_EQ(objects.objects(0).class_name(), "cup");
   EXPECT_NEAR(objects.objects(0).centroid().z(), 0.76, 0.05);
   EXPECT_EQ(objects.objects(0).num_points(), 0);  // no model unless asked
+  // Seen once: first and last in keyframe 1 of the server's first session.
+  EXPECT_EQ(objects.objects(0).first_seen().keyframe_id(), 1);
+  EXPECT_EQ(objects.objects(0).first_seen().session_id(), 1);
+  EXPECT_EQ(objects.objects(0).last_seen().keyframe_id(), 1);
+  EXPECT_EQ(objects.objects(0).last_seen().session_id(), 1);
 
   grpc::ClientContext get_context;
   v1::GetObjectRequest get;

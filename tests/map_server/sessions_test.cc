@@ -12,6 +12,7 @@
 #include "map_server/map_server.h"
 #include "test_data.h"
 #include "test_scenes.h"
+#include "types/coco_classes.h"
 
 namespace objmap {
 namespace {
@@ -137,6 +138,62 @@ TEST_F(MapServerSessions, EachStartAndStartSessionOpenASessionThatARestartLists)
   EXPECT_EQ(keyframes[1].session_id, 1);
   EXPECT_EQ(keyframes[2].session_id, 2);
   EXPECT_EQ(keyframes[3].session_id, 3);
+}
+
+// An object seen in two sessions says when it was first and last seen: the keyframes, their
+// sessions and stamps, also after a restart.
+TEST_F(MapServerSessions, AnObjectSaysInWhichSessionsItWasFirstAndLastSeen) {
+  const testing::SceneBox cup = {{-0.05, -0.05, 0.70}, {0.05, 0.05, 0.82}, {200, 30, 30}};
+  boxes_.push_back(cup);
+  auto add_cup_view = [&](MapServer* server, double y, double stamp_s) {
+    const Eigen::Isometry3d T_W_C =
+        testing::LookAt({-1.0, y, 1.3}, Eigen::Vector3d(0, 0, 0.7));
+    RgbdFrame frame = testing::RenderFrame(boxes_, K_, T_W_C, "view");
+    frame.stamp_s = stamp_s;
+    const std::vector<Detection> detections = {
+        {testing::ProjectBox(cup, T_W_C, K_), CocoClassId("cup"), 0.8f}};
+    AddKeyframeOutcome outcome;
+    const ServiceStatus status = server->AddKeyframe(frame, detections, &outcome);
+    EXPECT_TRUE(status.ok()) << status.message;
+  };
+  auto the_cup = [](const MapServer& server) {
+    ObjectFilter filter;
+    filter.class_id = CocoClassId("cup");
+    filter.include_unconfirmed = true;
+    std::vector<std::shared_ptr<const ObjectView>> objects;
+    std::uint64_t version = 0;
+    EXPECT_TRUE(server.QueryObjects(filter, &objects, &version).ok());
+    EXPECT_EQ(objects.size(), 1u);
+    return objects.empty() ? std::make_shared<const ObjectView>() : objects[0];
+  };
+  {
+    auto server = OpenServer();
+    ASSERT_TRUE(server);
+    add_cup_view(server.get(), 0.0, 10.0);
+    add_cup_view(server.get(), 0.1, 11.0);
+    const auto cup_view = the_cup(*server);
+    EXPECT_EQ(cup_view->first_seen.keyframe_id, 1);
+    EXPECT_EQ(cup_view->first_seen.session_id, 1);
+    EXPECT_EQ(cup_view->first_seen.stamp_s, 10.0);
+    EXPECT_EQ(cup_view->last_seen.keyframe_id, 2);
+    EXPECT_EQ(cup_view->last_seen.stamp_s, 11.0);
+    ASSERT_TRUE(server->StartSession("next day", nullptr).ok());
+    add_cup_view(server.get(), -0.1, 90000.0);
+    const auto seen_again = the_cup(*server);
+    EXPECT_EQ(seen_again->first_seen.session_id, 1);
+    EXPECT_EQ(seen_again->last_seen.keyframe_id, 3);
+    EXPECT_EQ(seen_again->last_seen.session_id, 2);
+    EXPECT_EQ(seen_again->last_seen.stamp_s, 90000.0);
+  }
+  auto server = OpenServer();
+  ASSERT_TRUE(server);
+  const auto restored = the_cup(*server);
+  EXPECT_EQ(restored->first_seen.keyframe_id, 1);
+  EXPECT_EQ(restored->first_seen.session_id, 1);
+  EXPECT_EQ(restored->first_seen.stamp_s, 10.0);
+  EXPECT_EQ(restored->last_seen.keyframe_id, 3);
+  EXPECT_EQ(restored->last_seen.session_id, 2);
+  EXPECT_EQ(restored->last_seen.stamp_s, 90000.0);
 }
 
 // Estimated poses on real frames: a map of one part of redkitchen, then sessions that start

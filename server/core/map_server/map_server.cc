@@ -194,6 +194,9 @@ bool MapServer::Impl::RestoreFromStore(std::uint64_t* version, std::string* why)
   if (checkpoint) checkpoint_version = checkpoint->map_version;
   *version = stored.map_version;
   const bool pose_update_pending = stored.pose_update_pending;
+  for (const StoredKeyframe& keyframe : stored.keyframes) {
+    snapshot_builder.AddKeyframe(keyframe.id, keyframe.session_id, keyframe.stamp_s);
+  }
   std::set<KeyframeId> keyframe_ids;
   const RestoreOutcome restored =
       RestoreMapper(std::move(stored), std::move(checkpoint), mapper.get(), &keyframe_ids);
@@ -383,6 +386,7 @@ MapJob::Result MapServer::Impl::ApplyKeyframe(MapJob* job) {
     }
   }
   out.keyframe.session_id = job->session.id;
+  snapshot_builder.AddKeyframe(result.keyframe_id, job->session.id, job->frame.stamp_s);
   SnapshotBuilder::Diff diff;
   auto next = snapshot_builder.Build(*mapper, job->version, &diff);
   MapChange map_change{job->version, MapChange::Kind::kKeyframeAdded, result.keyframe_id,

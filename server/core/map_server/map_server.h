@@ -109,6 +109,13 @@ struct ObjectSighting {
 };
 
 /// An immutable view of one object, shared between snapshots while the object does not change.
+/// A keyframe that observed an object: which, in which session, at which camera stamp.
+struct ObjectSeen {
+  KeyframeId keyframe_id = 0;
+  SessionId session_id = 0;
+  double stamp_s = 0.0;
+};
+
 struct ObjectView {
   ObjectId id = 0;
   int class_id = -1;  ///< label
@@ -120,6 +127,9 @@ struct ObjectView {
   std::vector<KeyframeId> keyframes;
   std::vector<std::pair<int, float>> scores;  ///< non-zero accumulated class scores, best first
   std::vector<ObjectSighting> sightings;      ///< one per observation, in keyframe order
+  /// The first and the last keyframe that observed it (lowest and highest id: keyframes are
+  /// numbered in the order they were mapped), with their sessions and stamps.
+  ObjectSeen first_seen, last_seen;
   bool confirmed = false;                     ///< passes the inventory thresholds
   std::uint64_t changed_version = 0;          ///< map version of the last change
   std::shared_ptr<const ColoredPoints> model_W;  ///< the 5 mm model, world frame

@@ -39,6 +39,14 @@ std::shared_ptr<const ObjectView> SnapshotBuilder::MakeView(
                    [](const ObjectSighting& a, const ObjectSighting& b) {
                      return a.keyframe_id < b.keyframe_id;
                    });
+  if (!view->sightings.empty()) {
+    auto seen = [this](KeyframeId id) {
+      const auto it = keyframes_.find(id);
+      return it != keyframes_.end() ? it->second : ObjectSeen{id, 0, 0.0};
+    };
+    view->first_seen = seen(view->sightings.front().keyframe_id);
+    view->last_seen = seen(view->sightings.back().keyframe_id);
+  }
   view->confirmed = confirmed;
   view->changed_version = version;
   // The model is the expensive part: shared with the previous view when the object's published
@@ -47,6 +55,10 @@ std::shared_ptr<const ObjectView> SnapshotBuilder::MakeView(
                       ? previous->model_W
                       : std::make_shared<const ColoredPoints>(objects.ModelPoints(object));
   return view;
+}
+
+void SnapshotBuilder::AddKeyframe(KeyframeId id, SessionId session_id, double stamp_s) {
+  keyframes_[id] = ObjectSeen{id, session_id, stamp_s};
 }
 
 void SnapshotBuilder::Touch(int class_id, std::uint64_t version) {

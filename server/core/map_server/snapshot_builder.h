@@ -24,6 +24,10 @@ class SnapshotBuilder {
   /// A snapshot of `mapper` at `version`; `diff` (may be null) receives the object changes.
   std::shared_ptr<const MapSnapshot> Build(const Mapper& mapper, std::uint64_t version, Diff* diff);
 
+  /// The session and stamp of a keyframe, for the objects' first and last sightings: every
+  /// keyframe before the Build that first shows an observation of it.
+  void AddKeyframe(KeyframeId id, SessionId session_id, double stamp_s);
+
  private:
   std::shared_ptr<const ObjectView> MakeView(const ObjectMap& objects, const MapObject& object,
                                              bool confirmed, bool same_model, std::uint64_t version,
@@ -31,6 +35,7 @@ class SnapshotBuilder {
   void Touch(int class_id, std::uint64_t version);
 
   std::map<ObjectId, std::shared_ptr<const ObjectView>> views_;
+  std::map<KeyframeId, ObjectSeen> keyframes_;
   // ObjectMap::ModelKey behind each view's model.
   std::map<ObjectId, std::vector<std::pair<ObjectId, std::uint64_t>>> model_keys_;
   std::array<std::uint64_t, kNumObjectClasses> class_changed_version_{};
