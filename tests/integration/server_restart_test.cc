@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <mutex>
 #include <random>
@@ -64,8 +65,10 @@ std::vector<std::string> Query(const std::string& db_path, const std::string& sq
   return rows;
 }
 
-// kill -9 at random moments of an ingest, ten times: after each restart every acknowledged
-// keyframe is stored (and nothing twice), and SQLite's integrity check passes.
+// kill -9 at random moments of an ingest, each into a named session of its own, ten times: after
+// each restart every acknowledged keyframe is stored (and nothing twice) in the session it was
+// acknowledged in, every such session is stored with its name, and SQLite's integrity check
+// passes.
 TEST(KillSoak, EveryAcknowledgedKeyframeSurvivesTenKills) {
   const fs::path dir = fs::temp_directory_path() / ("objmap_soak_" + std::to_string(::getpid()));
   fs::remove_all(dir);
@@ -84,6 +87,8 @@ TEST(KillSoak, EveryAcknowledgedKeyframeSurvivesTenKills) {
   const std::string db = (dir / "soak.db").string(), log = (dir / "soak.log").string();
   std::mt19937 random(2026);
   std::set<std::string> acknowledged;
+  std::map<std::string, std::int64_t> session_of;  // acknowledged keyframe -> its session
+  std::map<std::int64_t, std::string> session_names;  // sessions started, by id
   int rounds_with_acknowledgements = 0;
   for (int round = 0; round < 10; ++round) {
     testing::ServerProcess server(OBJMAP_SERVER_PATH, db, log, {"--no-detector"});
@@ -91,8 +96,17 @@ TEST(KillSoak, EveryAcknowledgedKeyframeSurvivesTenKills) {
     MapClient client(server.address());
     std::mutex mutex;
     int acknowledged_this_round = 0;
-    // Writes until the server dies; the kill lands at a random moment of one of them.
+    // A named session, then writes until the server dies; the kill lands at a random moment of
+    // one of them (or of the session's start).
     std::thread writer([&] {
+      v1::StartSessionRequest start;
+      start.set_name("round " + std::to_string(round));
+      v1::Session session;
+      if (!client.StartSession(start, &session).ok()) return;
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        session_names[session.id()] = session.name();
+      }
       for (std::size_t k = 0;; ++k) {
         v1::AddKeyframeRequest request = frames[k % frames.size()];
         request.set_name("round-" + std::to_string(round) + "-" + std::to_string(k));
@@ -100,6 +114,7 @@ TEST(KillSoak, EveryAcknowledgedKeyframeSurvivesTenKills) {
         if (!client.AddKeyframe(request, &response).ok()) return;
         std::lock_guard<std::mutex> lock(mutex);
         acknowledged.insert(request.name());
+        session_of[request.name()] = response.session_id();
         ++acknowledged_this_round;
       }
     });
@@ -116,6 +131,23 @@ TEST(KillSoak, EveryAcknowledgedKeyframeSurvivesTenKills) {
     for (const std::string& name : acknowledged) {
       EXPECT_EQ(stored.count(name), 1u) << name << " was acknowledged and is lost, round " << round;
     }
+    // Each acknowledged keyframe is stored in the session it was acknowledged in, and that
+    // session with its name: no session is lost.
+    const std::vector<std::string> keyframe_sessions =
+        Query(db, "SELECT name || ' ' || session_id FROM keyframes");
+    const std::set<std::string> stored_pairs(keyframe_sessions.begin(), keyframe_sessions.end());
+    for (const auto& [name, session_id] : session_of) {
+      EXPECT_EQ(stored_pairs.count(name + " " + std::to_string(session_id)), 1u)
+          << name << " is not stored in session " << session_id << ", round " << round;
+      const std::vector<std::string> row =
+          Query(db, "SELECT name FROM sessions WHERE id = " + std::to_string(session_id));
+      EXPECT_EQ(row, std::vector<std::string>{session_names[session_id]})
+          << "session " << session_id << ", round " << round;
+    }
+    EXPECT_EQ(Query(db, "SELECT count(*) FROM keyframes WHERE session_id NOT IN "
+                        "(SELECT id FROM sessions)"),
+              std::vector<std::string>{"0"})
+        << "keyframes of a session without its row, round " << round;
   }
   EXPECT_GE(rounds_with_acknowledgements, 5) << "the kills came before any write was done";
   // The last restart serves the map of every stored keyframe.
