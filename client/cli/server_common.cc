@@ -90,6 +90,7 @@ Json ObjectJson(const v1::Object& object) {
     json["first_seen"] = seen_json(object.first_seen());
     json["last_seen"] = seen_json(object.last_seen());
   }
+  if (object.has_last_seen_absent()) json["last_seen_absent"] = seen_json(object.last_seen_absent());
   return json;
 }
 

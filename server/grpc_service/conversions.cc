@@ -191,6 +191,9 @@ void ObjectToProto(const ObjectView& view, bool include_model, v1::Object* objec
     };
     seen_to_proto(view.first_seen, object->mutable_first_seen());
     seen_to_proto(view.last_seen, object->mutable_last_seen());
+    if (view.last_seen_absent.keyframe_id != 0) {
+      seen_to_proto(view.last_seen_absent, object->mutable_last_seen_absent());
+    }
   }
   if (include_model && view.model_W) ModelToProto(*view.model_W, object);
 }

@@ -140,18 +140,22 @@ TEST_F(MapServerSessions, EachStartAndStartSessionOpenASessionThatARestartLists)
   EXPECT_EQ(keyframes[3].session_id, 3);
 }
 
-// An object seen in two sessions says when it was first and last seen: the keyframes, their
-// sessions and stamps, also after a restart.
+// An object seen in two sessions says when it was first and last seen, and once taken away,
+// when it was seen absent: the keyframes, their sessions and stamps, also after a restart.
 TEST_F(MapServerSessions, AnObjectSaysInWhichSessionsItWasFirstAndLastSeen) {
   const testing::SceneBox cup = {{-0.05, -0.05, 0.70}, {0.05, 0.05, 0.82}, {200, 30, 30}};
   boxes_.push_back(cup);
-  auto add_cup_view = [&](MapServer* server, double y, double stamp_s) {
+  auto add_cup_view = [&](MapServer* server, double y, double stamp_s, bool cup_there = true) {
     const Eigen::Isometry3d T_W_C =
         testing::LookAt({-1.0, y, 1.3}, Eigen::Vector3d(0, 0, 0.7));
-    RgbdFrame frame = testing::RenderFrame(boxes_, K_, T_W_C, "view");
+    std::vector<testing::SceneBox> scene = boxes_;
+    if (!cup_there) scene.pop_back();
+    RgbdFrame frame = testing::RenderFrame(scene, K_, T_W_C, "view");
     frame.stamp_s = stamp_s;
-    const std::vector<Detection> detections = {
-        {testing::ProjectBox(cup, T_W_C, K_), CocoClassId("cup"), 0.8f}};
+    std::vector<Detection> detections;
+    if (cup_there) {
+      detections.push_back({testing::ProjectBox(cup, T_W_C, K_), CocoClassId("cup"), 0.8f});
+    }
     AddKeyframeOutcome outcome;
     const ServiceStatus status = server->AddKeyframe(frame, detections, &outcome);
     EXPECT_TRUE(status.ok()) << status.message;
@@ -184,6 +188,14 @@ TEST_F(MapServerSessions, AnObjectSaysInWhichSessionsItWasFirstAndLastSeen) {
     EXPECT_EQ(seen_again->last_seen.keyframe_id, 3);
     EXPECT_EQ(seen_again->last_seen.session_id, 2);
     EXPECT_EQ(seen_again->last_seen.stamp_s, 90000.0);
+    EXPECT_EQ(seen_again->last_seen_absent.keyframe_id, 0) << "every view so far saw it";
+    // The cup taken away: the next view, which has its place in sight, sees it absent.
+    add_cup_view(server.get(), 0.05, 90010.0, /*cup_there=*/false);
+    const auto taken = the_cup(*server);
+    EXPECT_EQ(taken->last_seen.keyframe_id, 3);
+    EXPECT_EQ(taken->last_seen_absent.keyframe_id, 4);
+    EXPECT_EQ(taken->last_seen_absent.session_id, 2);
+    EXPECT_EQ(taken->last_seen_absent.stamp_s, 90010.0);
   }
   auto server = OpenServer();
   ASSERT_TRUE(server);
@@ -194,6 +206,14 @@ TEST_F(MapServerSessions, AnObjectSaysInWhichSessionsItWasFirstAndLastSeen) {
   EXPECT_EQ(restored->last_seen.keyframe_id, 3);
   EXPECT_EQ(restored->last_seen.session_id, 2);
   EXPECT_EQ(restored->last_seen.stamp_s, 90000.0);
+  EXPECT_EQ(restored->last_seen_absent.keyframe_id, 4);
+  EXPECT_EQ(restored->last_seen_absent.session_id, 2);
+
+  InventoryConfig bad;
+  bad.absent_min_visibility = 0.f;
+  std::string why;
+  EXPECT_FALSE(bad.IsValid(&why));
+  EXPECT_NE(why.find("absent_min_visibility"), std::string::npos) << why;
 }
 
 // Estimated poses on real frames: a map of one part of redkitchen, then sessions that start

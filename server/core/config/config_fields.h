@@ -88,6 +88,7 @@ void VisitMapModel(MapperConfig* m, Visitor& v) {
   v("min_confidence", &i.min_confidence);
   v("min_observations", &i.min_observations);
   v("detectable_area_px", &i.detectable_area_px);
+  v("absent_min_visibility", &i.absent_min_visibility);
   v("occlusion_margin_m", &i.occlusion_margin_m);
   v("occlusion_margin_per_m2", &i.occlusion_margin_per_m2);
   v("max_visibility_points", &i.max_visibility_points);

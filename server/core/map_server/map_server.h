@@ -130,6 +130,9 @@ struct ObjectView {
   /// The first and the last keyframe that observed it (lowest and highest id: keyframes are
   /// numbered in the order they were mapped), with their sessions and stamps.
   ObjectSeen first_seen, last_seen;
+  /// The newest keyframe that had it in view and did not see it (InventoryConfig::
+  /// absent_min_visibility): seen absent, e.g. taken away since; keyframe_id 0: never.
+  ObjectSeen last_seen_absent;
   bool confirmed = false;                     ///< passes the inventory thresholds
   std::uint64_t changed_version = 0;          ///< map version of the last change
   std::shared_ptr<const ColoredPoints> model_W;  ///< the 5 mm model, world frame

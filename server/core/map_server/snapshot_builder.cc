@@ -5,9 +5,15 @@
 
 namespace objmap {
 
+ObjectSeen SnapshotBuilder::Seen(KeyframeId id) const {
+  const auto it = keyframes_.find(id);
+  return it != keyframes_.end() ? it->second : ObjectSeen{id, 0, 0.0};
+}
+
 std::shared_ptr<const ObjectView> SnapshotBuilder::MakeView(
     const ObjectMap& objects, const MapObject& object, bool confirmed, bool same_model,
-    std::uint64_t version, const std::shared_ptr<const ObjectView>& previous) {
+    KeyframeId last_absent, std::uint64_t version,
+    const std::shared_ptr<const ObjectView>& previous) {
   auto view = std::make_shared<ObjectView>();
   view->id = object.id;
   view->class_id = object.Label();
@@ -40,13 +46,10 @@ std::shared_ptr<const ObjectView> SnapshotBuilder::MakeView(
                      return a.keyframe_id < b.keyframe_id;
                    });
   if (!view->sightings.empty()) {
-    auto seen = [this](KeyframeId id) {
-      const auto it = keyframes_.find(id);
-      return it != keyframes_.end() ? it->second : ObjectSeen{id, 0, 0.0};
-    };
-    view->first_seen = seen(view->sightings.front().keyframe_id);
-    view->last_seen = seen(view->sightings.back().keyframe_id);
+    view->first_seen = Seen(view->sightings.front().keyframe_id);
+    view->last_seen = Seen(view->sightings.back().keyframe_id);
   }
+  if (last_absent != 0) view->last_seen_absent = Seen(last_absent);
   view->confirmed = confirmed;
   view->changed_version = version;
   // The model is the expensive part: shared with the previous view when the object's published
@@ -87,13 +90,17 @@ std::shared_ptr<const MapSnapshot> SnapshotBuilder::Build(const Mapper& mapper,
     auto model_key = mapper.objects().ModelKey(object);
     auto key_it = model_keys_.find(id);
     const bool same_model = key_it != model_keys_.end() && key_it->second == model_key;
+    // Seen absent by a newer keyframe is a change too (the object may have been taken away).
+    const KeyframeId last_absent = mapper.Evidence(object).last_absent;
     const bool unchanged = previous && same_model && previous->confirmed == is_confirmed &&
-                           previous->observations == static_cast<int>(object.observations.size());
+                           previous->observations == static_cast<int>(object.observations.size()) &&
+                           previous->last_seen_absent.keyframe_id == last_absent;
     if (unchanged) {
       snapshot->objects.emplace(id, previous);
       continue;
     }
-    auto view = MakeView(mapper.objects(), object, is_confirmed, same_model, version, previous);
+    auto view = MakeView(mapper.objects(), object, is_confirmed, same_model, last_absent, version,
+                         previous);
     (previous ? local.updated : local.added).push_back(id);
     if (previous) Touch(previous->class_id, version);
     Touch(view->class_id, version);

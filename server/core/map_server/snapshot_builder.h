@@ -30,8 +30,11 @@ class SnapshotBuilder {
 
  private:
   std::shared_ptr<const ObjectView> MakeView(const ObjectMap& objects, const MapObject& object,
-                                             bool confirmed, bool same_model, std::uint64_t version,
+                                             bool confirmed, bool same_model, KeyframeId last_absent,
+                                             std::uint64_t version,
                                              const std::shared_ptr<const ObjectView>& previous);
+  /// The keyframe's session and stamp (unknown ones: 0).
+  [[nodiscard]] ObjectSeen Seen(KeyframeId id) const;
   void Touch(int class_id, std::uint64_t version);
 
   std::map<ObjectId, std::shared_ptr<const ObjectView>> views_;

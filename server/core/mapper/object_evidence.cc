@@ -14,6 +14,10 @@ bool InventoryConfig::IsValid(std::string* why) const {
     *why = "InventoryConfig: min_observations must be >= 1 and min_confidence in [0, 1]";
     return false;
   }
+  if (!(absent_min_visibility > 0.f && absent_min_visibility <= 1.f)) {
+    *why = "InventoryConfig: absent_min_visibility must be in (0, 1]";
+    return false;
+  }
   if (!(detectable_area_px > 0.f)) {
     *why = "InventoryConfig: detectable_area_px must be positive";
     return false;
@@ -166,6 +170,9 @@ ObjectEvidence EvidenceOf(const MapObject& object,
     if (detected.count(keyframe) > 0 || !(seen.visible_fraction > 0.f)) continue;
     const float detectability = std::min(1.f, seen.projected_area_px / config.detectable_area_px);
     add(keyframe, -config.miss_weight * seen.visible_fraction * detectability, false);
+    if (seen.visible_fraction * detectability >= config.absent_min_visibility) {
+      evidence.last_absent = std::max(evidence.last_absent, keyframe);
+    }
   }
   double total = 0.0;
   for (const auto& [view, sum] : views) {

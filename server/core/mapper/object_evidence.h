@@ -55,6 +55,9 @@ struct InventoryConfig {
   /// about half of AP_large), so a mouse or a far mug (30-50 px across) that a detector finds
   /// in a third of the views is real, while a miss of anything larger costs in full.
   float detectable_area_px = 4096.f;
+  /// A keyframe saw an object absent (ObjectEvidence::last_absent) when it did not detect it
+  /// while at least this much of it was in view: visible fraction x detectability (0..1].
+  float absent_min_visibility = 0.5f;
   /// A model point counts as hidden when the measured depth at its pixel is more than this (plus
   /// occlusion_margin_per_m2 x depth squared, the sensor's noise) in front of it, metres.
   float occlusion_margin_m = 0.05f;
@@ -108,6 +111,9 @@ struct ObjectEvidence {
   int keyframes_seeing = 0;  ///< keyframes that saw it (visible) or detected it
   int views_seeing = 0;      ///< independent views among them
   int views_detecting = 0;   ///< independent views with at least one detection of it
+  /// The newest keyframe that had it in view (absent_min_visibility) and did not detect it:
+  /// where it should have been seen and was not; 0: none.
+  KeyframeId last_absent = 0;
 };
 
 /// The evidence of `object` from its visibility in each keyframe (keyframes missing from
