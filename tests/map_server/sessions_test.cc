@@ -39,7 +39,7 @@ class MapServerSessions : public ::testing::Test {
 
   std::unique_ptr<MapServer> OpenServer() const {
     std::string why;
-    auto server = MapServer::Open(MapServerConfig{}, db_path_, nullptr, &why);
+    auto server = MapServer::Open(config_, db_path_, nullptr, &why);
     EXPECT_TRUE(server) << why;
     return server;
   }
@@ -61,6 +61,7 @@ class MapServerSessions : public ::testing::Test {
     return sessions;
   }
 
+  const MapServerConfig config_;
   CameraIntrinsics K_;
   std::vector<testing::SceneBox> boxes_;
   std::string db_path_;
