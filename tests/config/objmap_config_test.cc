@@ -118,6 +118,26 @@ TEST(ObjmapConfig, EmptyModelPathMeansTheInstalledModel) {
   EXPECT_EQ(why.rfind("keyframes: ", 0), 0u) << why;
 }
 
+TEST(ObjmapConfig, SessionKeysParseAndAreChecked) {
+  ObjmapConfig config;
+  std::string why;
+  ASSERT_TRUE(SetObjmapConfigKey("server.pose_source=session_frame", &config, &why)) << why;
+  ASSERT_TRUE(SetObjmapConfigKey("server.relocalisation_map_keyframes=500", &config, &why)) << why;
+  ASSERT_TRUE(SetObjmapConfigKey("inventory.absent_min_visibility=0.7", &config, &why)) << why;
+  EXPECT_EQ(config.map_server.pose_source, PoseSource::kSessionFrame);
+  EXPECT_EQ(config.map_server.relocalisation_map_keyframes, 500);
+  EXPECT_FLOAT_EQ(config.map_server.mapper.inventory.absent_min_visibility, 0.7f);
+  EXPECT_TRUE(config.IsValid(&why)) << why;
+  EXPECT_NE(ObjmapConfigToYaml(config).find("pose_source: session_frame"), std::string::npos);
+
+  EXPECT_FALSE(SetObjmapConfigKey("server.pose_source=gps", &config, &why));
+  EXPECT_NE(why.find("expected request, estimate or session_frame, got"), std::string::npos)
+      << why;
+  config.map_server.relocalisation_map_keyframes = -1;
+  EXPECT_FALSE(config.IsValid(&why));
+  EXPECT_NE(why.find("relocalisation_map_keyframes"), std::string::npos) << why;
+}
+
 TEST(ObjmapConfig, SetKeyGoesThroughTheFileReader) {
   ObjmapConfig config;
   std::string why;

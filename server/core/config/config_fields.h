@@ -130,6 +130,7 @@ void VisitObjmapConfig(ObjmapConfig* c, Visitor& v) {
   v("checkpoint_every_keyframes", &s.checkpoint_every_keyframes);
   v("checkpoint_work_ratio", &s.checkpoint_work_ratio);
   v("pose_source", &s.pose_source);
+  v("relocalisation_map_keyframes", &s.relocalisation_map_keyframes);
   // The request limits (RequestLimits) sit beside the server's other bounds.
   v("max_image_pixels", &s.limits.max_image_pixels);
   v("max_detections_per_keyframe", &s.limits.max_detections_per_keyframe);

@@ -100,6 +100,10 @@ bool MapServerConfig::IsValid(std::string* why) const {
     *why = "MapServerConfig.checkpoint_work_ratio must be finite and >= 0";
     return false;
   }
+  if (relocalisation_map_keyframes < 0) {
+    *why = "MapServerConfig.relocalisation_map_keyframes must be >= 0 (0: all)";
+    return false;
+  }
   if (!(max_query_volume_m3 > 0.0)) {
     *why = "MapServerConfig.max_query_volume_m3 must be positive";
     return false;

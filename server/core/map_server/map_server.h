@@ -89,8 +89,9 @@ struct MapServerConfig {
   /// what saving that checkpoint took: a large map, slower to save, is saved less often, and
   /// saving never takes more than about 1 / (1 + this) of the mapping thread's time.
   double checkpoint_work_ratio = 10.0;
-  /// With kEstimate: stored keyframes (the newest ones) that tracking loads at each session
-  /// start to place the camera in the saved map by relocalisation. 0: all of them.
+  /// Config key server.relocalisation_map_keyframes. With kEstimate and kSessionFrame: stored
+  /// keyframes (the newest ones) that tracking loads at each session start to place the camera
+  /// in the saved map by relocalisation (about 5 ms each, docs/benchmarks.md). 0: all of them.
   int relocalisation_map_keyframes = 0;
   /// What one request may ask (config section server: max_image_pixels, ...).
   RequestLimits limits;
