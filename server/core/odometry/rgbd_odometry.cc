@@ -82,6 +82,48 @@ cv::Mat StrongestDescriptors(const FrameFeatures& features, int count) {
   return strongest;
 }
 
+using KeyframeList = std::vector<std::shared_ptr<const Keyframe>>;
+
+// Adds keyframes *indexed..last to `index` by their strongest descriptors; *indexed then is
+// last + 1, so that each keyframe joins an index once.
+void IndexKeyframes(const KeyframeList& keyframes, int last, AppearanceIndex* index, int* indexed) {
+  for (; *indexed <= last; ++*indexed) {
+    const cv::Mat& descriptors =
+        keyframes[static_cast<std::size_t>(*indexed)]->strongest_descriptors;
+    if (descriptors.rows > 0 && descriptors.isContinuous()) {
+      index->Add(*indexed, descriptors.ptr<std::uint8_t>(), descriptors.rows);
+    }
+  }
+}
+
+// Of `candidates` (less those in `skip`), the at most `count` keyframes whose strongest
+// descriptors pass the ratio test against `mine` most often, and at least `min_matches` times;
+// the most matched first.
+std::vector<int> MostMatched(const cv::Mat& mine, const std::vector<int>& candidates,
+                             const std::vector<int>& skip, const KeyframeList& keyframes,
+                             float match_ratio, int min_matches, int count) {
+  const cv::BFMatcher matcher(cv::NORM_HAMMING);
+  std::vector<std::pair<int, int>> scored;  // (matches, keyframe)
+  for (const int k : candidates) {
+    if (std::find(skip.begin(), skip.end(), k) != skip.end()) continue;
+    const cv::Mat& theirs = keyframes[static_cast<std::size_t>(k)]->strongest_descriptors;
+    if (theirs.rows < 2) continue;
+    std::vector<std::vector<cv::DMatch>> knn;
+    matcher.knnMatch(mine, theirs, knn, 2);
+    int matches = 0;
+    for (const auto& pair : knn) {
+      matches += pair.size() == 2 && pair[0].distance < match_ratio * pair[1].distance;
+    }
+    if (matches >= min_matches) scored.emplace_back(matches, k);
+  }
+  std::sort(scored.rbegin(), scored.rend());
+  std::vector<int> best;
+  for (std::size_t i = 0; i < scored.size() && static_cast<int>(i) < count; ++i) {
+    best.push_back(scored[i].second);
+  }
+  return best;
+}
+
 Eigen::Isometry3d FromRvecTvec(const cv::Mat& rvec, const cv::Mat& tvec) {
   cv::Mat R;
   cv::Rodrigues(rvec, R);
@@ -291,13 +333,7 @@ std::vector<int> RgbdOdometry::Impl::AppearanceCandidates(const LoopJob& job,
                                                           const std::vector<int>& already) {
   if (config.loop_appearance_candidates <= 0) return {};
   // Keyframes made since the last search join the index first.
-  for (; indexed_keyframes <= job.newest; ++indexed_keyframes) {
-    const cv::Mat& descriptors =
-        job.keyframes[static_cast<std::size_t>(indexed_keyframes)]->strongest_descriptors;
-    if (descriptors.rows > 0 && descriptors.isContinuous()) {
-      appearance_index.Add(indexed_keyframes, descriptors.ptr<std::uint8_t>(), descriptors.rows);
-    }
-  }
+  IndexKeyframes(job.keyframes, job.newest, &appearance_index, &indexed_keyframes);
   const cv::Mat& mine = job.keyframes[static_cast<std::size_t>(job.newest)]->strongest_descriptors;
   if (mine.rows < 2) return {};
   const int last_old = job.newest - config.loop_min_keyframe_gap;
@@ -310,27 +346,8 @@ std::vector<int> RgbdOdometry::Impl::AppearanceCandidates(const LoopJob& job,
   } else {
     for (int k = 0; k <= last_old; ++k) shortlist.push_back(k);
   }
-  const cv::BFMatcher matcher(cv::NORM_HAMMING);
-  std::vector<std::pair<int, int>> scored;  // (matches, keyframe)
-  for (const int k : shortlist) {
-    if (std::find(already.begin(), already.end(), k) != already.end()) continue;
-    const cv::Mat& theirs = job.keyframes[static_cast<std::size_t>(k)]->strongest_descriptors;
-    if (theirs.rows < 2) continue;
-    std::vector<std::vector<cv::DMatch>> knn;
-    matcher.knnMatch(mine, theirs, knn, 2);
-    int matches = 0;
-    for (const auto& pair : knn) {
-      matches += pair.size() == 2 && pair[0].distance < config.match_ratio * pair[1].distance;
-    }
-    if (matches >= config.loop_min_inliers) scored.emplace_back(matches, k);
-  }
-  std::sort(scored.rbegin(), scored.rend());
-  std::vector<int> best;
-  for (std::size_t i = 0;
-       i < scored.size() && static_cast<int>(i) < config.loop_appearance_candidates; ++i) {
-    best.push_back(scored[i].second);
-  }
-  return best;
+  return MostMatched(mine, shortlist, already, job.keyframes, config.match_ratio,
+                     config.loop_min_inliers, config.loop_appearance_candidates);
 }
 
 LoopClosure RgbdOdometry::Impl::CloseLoops(const LoopJob& job) {
@@ -477,39 +494,19 @@ void RgbdOdometry::Impl::StopWorker() {
 std::vector<int> RgbdOdometry::Impl::LookAlikeKeyframes(const FrameFeatures& features, int count,
                                                         const std::vector<int>& skip) {
   if (count <= 0) return {};
-  for (; relocalisation_indexed < static_cast<int>(keyframes.size()); ++relocalisation_indexed) {
-    const cv::Mat& descriptors =
-        keyframes[static_cast<std::size_t>(relocalisation_indexed)]->strongest_descriptors;
-    if (descriptors.rows > 0 && descriptors.isContinuous()) {
-      relocalisation_index.Add(relocalisation_indexed, descriptors.ptr<std::uint8_t>(),
-                               descriptors.rows);
-    }
-  }
+  IndexKeyframes(keyframes, static_cast<int>(keyframes.size()) - 1, &relocalisation_index,
+                 &relocalisation_indexed);
   const cv::Mat mine = StrongestDescriptors(features, config.appearance_descriptors);
   if (mine.rows < 2 || !mine.isContinuous()) return {};
   const int shortlist_size = std::max(config.appearance_shortlist, count);
-  const cv::BFMatcher matcher(cv::NORM_HAMMING);
-  std::vector<std::pair<int, int>> scored;  // (matches, keyframe)
+  std::vector<int> shortlist;
   for (const auto& [votes, k] :
        relocalisation_index.MostAlike(mine.ptr<std::uint8_t>(), mine.rows,
                                       static_cast<int>(keyframes.size()) - 1, shortlist_size)) {
-    if (std::find(skip.begin(), skip.end(), k) != skip.end()) continue;
-    const cv::Mat& theirs = keyframes[static_cast<std::size_t>(k)]->strongest_descriptors;
-    if (theirs.rows < 2) continue;
-    std::vector<std::vector<cv::DMatch>> knn;
-    matcher.knnMatch(mine, theirs, knn, 2);
-    int matches = 0;
-    for (const auto& pair : knn) {
-      matches += pair.size() == 2 && pair[0].distance < config.match_ratio * pair[1].distance;
-    }
-    if (matches >= config.min_inliers) scored.emplace_back(matches, k);
+    shortlist.push_back(k);
   }
-  std::sort(scored.rbegin(), scored.rend());
-  std::vector<int> best;
-  for (std::size_t i = 0; i < scored.size() && static_cast<int>(i) < count; ++i) {
-    best.push_back(scored[i].second);
-  }
-  return best;
+  return MostMatched(mine, shortlist, skip, keyframes, config.match_ratio, config.min_inliers,
+                     count);
 }
 
 bool RgbdOdometry::Impl::Extract(const RgbdFrame& frame, FrameFeatures* features,
