@@ -170,14 +170,7 @@ std::unique_ptr<MapServer> MapServer::Open(const MapServerConfig& config,
   heavy.max_waiting = config.fairness.max_waiting_heavy_queries;
   heavy.name = "objmap-heavy";
   impl.heavy_query_threads = std::make_unique<TaskThreads>(heavy);
-  if (config.pose_source == PoseSource::kEstimate) {
-    impl.odometry = std::make_unique<RgbdOdometry>(config.odometry);
-    std::string resumed_from;
-    impl.tracking_blocked =
-        server->StartTrackingOnStoredMap(impl.odometry.get(), &resumed_from).message;
-  } else if (config.pose_source == PoseSource::kSessionFrame) {
-    impl.ResetSessionFrame(*server);
-  }
+  impl.BeginSessionTracking(*server);
   // What this start had to integrate, the next one loads.
   impl.MaybeCheckpoint(/*force=*/true);
   impl.startup_ms = MillisecondsSince(start);
@@ -462,16 +455,22 @@ MapJob::Result MapServer::Impl::ApplyPoses(MapJob* job) {
   return out;
 }
 
-ServiceStatus MapServer::KeyframeColor(KeyframeId id, ColorImage* color) const {
+ServiceStatus MapServer::Impl::LoadKnownKeyframe(KeyframeId id, StoredKeyframe* stored) const {
   {
-    std::lock_guard<std::mutex> lock(impl_->known_mutex);
-    if (impl_->known_keyframes.count(id) == 0) {
+    std::lock_guard<std::mutex> lock(known_mutex);
+    if (known_keyframes.count(id) == 0) {
       return ServiceStatus::NotFound("keyframe " + std::to_string(id) + " is not in the map");
     }
   }
-  StoredKeyframe stored;
   std::string why;
-  if (!impl_->store->LoadKeyframe(id, &stored, &why)) return {StatusCode::kInternal, why};
+  if (!store->LoadKeyframe(id, stored, &why)) return {StatusCode::kInternal, why};
+  return ServiceStatus::Ok();
+}
+
+ServiceStatus MapServer::KeyframeColor(KeyframeId id, ColorImage* color) const {
+  StoredKeyframe stored;
+  const ServiceStatus loaded = impl_->LoadKnownKeyframe(id, &stored);
+  if (!loaded.ok()) return loaded;
   *color = std::move(stored.color);
   return ServiceStatus::Ok();
 }

@@ -73,8 +73,10 @@ struct MapServer::Impl {
   // the current session's first keyframe, and then where the session's frame lies in the map.
   std::unique_ptr<RgbdOdometry> session_placer;
   std::optional<Eigen::Isometry3d> T_map_session;
-  /// A new session: its frame is not placed yet; the placer is seeded with the stored map.
-  void ResetSessionFrame(const MapServer& server);
+  /// A session starts (Open, StartSession): with kEstimate a new odometry, with kSessionFrame a
+  /// new placer and no placed frame; either seeded with the stored map (tracking_mutex held, or
+  /// before the mapping thread runs). Nothing with kRequest.
+  void BeginSessionTracking(const MapServer& server);
   /// Moves `frame`'s pose from its session's frame into the map's, placing the session's frame
   /// first when needed (`placed_now`); kFailedPrecondition with the reason when it cannot be.
   ServiceStatus PlaceInSessionFrame(RgbdFrame* frame, bool* placed_now);
@@ -95,6 +97,9 @@ struct MapServer::Impl {
   // Keyframe ids committed to the store: UpdatePoses validates against them on any thread.
   mutable std::mutex known_mutex;
   std::set<KeyframeId> known_keyframes;
+  /// A keyframe of the map as stored (images, current pose); kNotFound for an id the map does
+  /// not hold, kInternal when the store cannot read it.
+  ServiceStatus LoadKnownKeyframe(KeyframeId id, StoredKeyframe* stored) const;
 
   // The published snapshot.
   mutable std::mutex snapshot_mutex;

@@ -86,14 +86,7 @@ ServiceStatus MapServer::StartSession(const std::string& name, SessionSummary* s
     }
     begun = impl_->session;
   }
-  if (impl_->odometry) {
-    impl_->odometry = std::make_unique<RgbdOdometry>(impl_->config.odometry);
-    impl_->tracked_keyframes = TrackedKeyframes{};
-    std::string resumed_from;
-    impl_->tracking_blocked =
-        StartTrackingOnStoredMap(impl_->odometry.get(), &resumed_from).message;
-  }
-  if (session_frame) impl_->ResetSessionFrame(*this);
+  impl_->BeginSessionTracking(*this);
   if (started != nullptr) {
     *started = SessionSummary{};
     started->session = begun;
@@ -101,11 +94,21 @@ ServiceStatus MapServer::StartSession(const std::string& name, SessionSummary* s
   return ServiceStatus::Ok();
 }
 
-void MapServer::Impl::ResetSessionFrame(const MapServer& server) {
-  T_map_session.reset();
-  session_placer = std::make_unique<RgbdOdometry>(config.odometry);
+void MapServer::Impl::BeginSessionTracking(const MapServer& server) {
+  RgbdOdometry* tracker = nullptr;
+  if (config.pose_source == PoseSource::kEstimate) {
+    odometry = std::make_unique<RgbdOdometry>(config.odometry);
+    tracked_keyframes = TrackedKeyframes{};
+    tracker = odometry.get();
+  } else if (config.pose_source == PoseSource::kSessionFrame) {
+    T_map_session.reset();
+    session_placer = std::make_unique<RgbdOdometry>(config.odometry);
+    tracker = session_placer.get();
+  } else {
+    return;
+  }
   std::string resumed_from;
-  tracking_blocked = server.StartTrackingOnStoredMap(session_placer.get(), &resumed_from).message;
+  tracking_blocked = server.StartTrackingOnStoredMap(tracker, &resumed_from).message;
 }
 
 ServiceStatus MapServer::Impl::PlaceInSessionFrame(RgbdFrame* frame, bool* placed_now) {
@@ -169,15 +172,9 @@ ServiceStatus MapServer::NewestKeyframe(RgbdFrame* frame) const {
 }
 
 ServiceStatus MapServer::StoredFrame(KeyframeId id, RgbdFrame* frame) const {
-  {
-    std::lock_guard<std::mutex> lock(impl_->known_mutex);
-    if (impl_->known_keyframes.count(id) == 0) {
-      return ServiceStatus::NotFound("keyframe " + std::to_string(id) + " is not in the map");
-    }
-  }
   StoredKeyframe stored;
-  std::string why;
-  if (!impl_->store->LoadKeyframe(id, &stored, &why)) return {StatusCode::kInternal, why};
+  const ServiceStatus loaded = impl_->LoadKnownKeyframe(id, &stored);
+  if (!loaded.ok()) return loaded;
   *frame = RgbdFrame();
   frame->stamp_s = stored.stamp_s;
   frame->name = "stored keyframe " + std::to_string(id);
