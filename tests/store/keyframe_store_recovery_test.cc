@@ -19,6 +19,11 @@ using testing::ExpectSameKeyframe;
 using testing::MakeKeyframe;
 using testing::MakeObservation;
 
+// Turns a file of this version into one of version 2, which had no sessions.
+constexpr char kWithoutSessionsSql[] =
+    "DROP TABLE sessions; DROP INDEX keyframes_by_session;"
+    " ALTER TABLE keyframes DROP COLUMN session_id;";
+
 class KeyframeStoreRecoveryTest : public testing::StoreTest {
  protected:
   // A closed store with `n` keyframes (closing checkpoints the WAL into the file).
@@ -112,9 +117,8 @@ TEST_F(KeyframeStoreRecoveryTest, RejectsANewerSchemaVersion) {
 TEST_F(KeyframeStoreRecoveryTest, MigratesASchemaVersion1FileAndKeepsItsKeyframes) {
   CreateStore(Path(), 3);
   // What a version 1 file looks like: no checkpoint table, no sessions.
-  RunSql(Path(),
-         "DROP TABLE occupancy_checkpoint; DROP TABLE sessions; DROP INDEX keyframes_by_session;"
-         " ALTER TABLE keyframes DROP COLUMN session_id; PRAGMA user_version = 1;");
+  RunSql(Path(), std::string(kWithoutSessionsSql) +
+                     " DROP TABLE occupancy_checkpoint; PRAGMA user_version = 1;");
   std::string why;
   auto store = KeyframeStore::Open(Path(), KeyframeStoreConfig{}, &why);
   ASSERT_NE(store, nullptr) << why;
@@ -140,9 +144,7 @@ TEST_F(KeyframeStoreRecoveryTest, MigratesASchemaVersion1FileAndKeepsItsKeyframe
 // source and times are not known; new keyframes go on in sessions of their own.
 TEST_F(KeyframeStoreRecoveryTest, MigratesASchemaVersion2FileIntoOneSession) {
   CreateStore(Path(), 3);
-  RunSql(Path(),
-         "DROP TABLE sessions; DROP INDEX keyframes_by_session;"
-         " ALTER TABLE keyframes DROP COLUMN session_id; PRAGMA user_version = 2;");
+  RunSql(Path(), std::string(kWithoutSessionsSql) + " PRAGMA user_version = 2;");
   std::string why;
   auto store = KeyframeStore::Open(Path(), KeyframeStoreConfig{}, &why);
   ASSERT_NE(store, nullptr) << why;
@@ -188,9 +190,7 @@ TEST_F(KeyframeStoreRecoveryTest, MigratesASchemaVersion2FileIntoOneSession) {
 // An empty version 2 file has no session to migrate.
 TEST_F(KeyframeStoreRecoveryTest, MigratesAnEmptySchemaVersion2FileWithoutSessions) {
   CreateStore(Path(), 0);
-  RunSql(Path(),
-         "DROP TABLE sessions; DROP INDEX keyframes_by_session;"
-         " ALTER TABLE keyframes DROP COLUMN session_id; PRAGMA user_version = 2;");
+  RunSql(Path(), std::string(kWithoutSessionsSql) + " PRAGMA user_version = 2;");
   std::string why;
   auto store = KeyframeStore::Open(Path(), KeyframeStoreConfig{}, &why);
   ASSERT_NE(store, nullptr) << why;
