@@ -2,12 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
 #include <fstream>
-#include <map>
 #include <nlohmann/json.hpp>
 
 #include "sim/furniture_catalog.h"
+#include "sim/object_meshes.h"
 #include "sim/sim_random.h"
 #include "test_scenes.h"
 #include "types/coco_classes.h"
@@ -24,127 +23,6 @@ Eigen::Isometry3f Pose(const Eigen::Vector3f& t, float yaw = 0.f) {
   return T;
 }
 
-Rgb Jitter(const Rgb& color, Random* random) {
-  Rgb out;
-  for (int c = 0; c < 3; ++c) {
-    out[c] =
-        static_cast<std::uint8_t>(std::clamp(color[c] + random->Uniform(-20.0, 20.0), 0.0, 255.0));
-  }
-  return out;
-}
-
-// Objects stand on z = 0 of their frame, centred on x = y = 0 unless said otherwise.
-
-TriangleMesh Table(float length, float width, float height, const Rgb& wood) {
-  TriangleMesh mesh;
-  const float top = 0.03f, leg = 0.05f;
-  mesh.AddBox({-length / 2, -width / 2, height - top}, {length / 2, width / 2, height}, wood);
-  for (float sx : {-1.f, 1.f}) {
-    for (float sy : {-1.f, 1.f}) {
-      const Eigen::Vector3f c(sx * (length / 2 - leg), sy * (width / 2 - leg), 0.f);
-      mesh.AddBox(c - Eigen::Vector3f(leg / 2, leg / 2, 0.f),
-                  c + Eigen::Vector3f(leg / 2, leg / 2, height - top), wood);
-    }
-  }
-  return mesh;
-}
-
-// Seat 0.45 m high; the back is on the +y side.
-TriangleMesh Chair(const Rgb& color) {
-  TriangleMesh mesh;
-  const float seat = 0.45f, half = 0.22f, leg = 0.035f;
-  mesh.AddBox({-half, -half, seat - 0.04f}, {half, half, seat}, color);
-  mesh.AddBox({-half, half - 0.04f, seat}, {half, half, seat + 0.45f}, color);
-  for (float sx : {-1.f, 1.f}) {
-    for (float sy : {-1.f, 1.f}) {
-      const Eigen::Vector3f c(sx * (half - leg), sy * (half - leg), 0.f);
-      mesh.AddBox(c - Eigen::Vector3f(leg / 2, leg / 2, 0.f),
-                  c + Eigen::Vector3f(leg / 2, leg / 2, seat - 0.04f), color);
-    }
-  }
-  return mesh;
-}
-
-// A flat screen on a stand; the screen faces -y.
-TriangleMesh Monitor(float width, float height, const Rgb& frame, const Rgb& screen) {
-  TriangleMesh mesh;
-  mesh.AddBox({-0.12f, -0.1f, 0.f}, {0.12f, 0.1f, 0.015f}, frame);       // foot
-  mesh.AddBox({-0.025f, 0.02f, 0.015f}, {0.025f, 0.05f, 0.12f}, frame);  // neck
-  mesh.AddBox({-width / 2, -0.01f, 0.1f}, {width / 2, 0.03f, 0.1f + height}, frame);
-  mesh.AddBox({-width / 2 + 0.015f, -0.012f, 0.115f}, {width / 2 - 0.015f, -0.01f, 0.085f + height},
-              screen);
-  return mesh;
-}
-
-// A computer keyboard: a flat slab with a relief of keys (the paper's flat-keyboard case).
-TriangleMesh Keyboard(const Rgb& body, const Rgb& keys) {
-  TriangleMesh mesh;
-  const float length = 0.44f, depth = 0.14f;
-  mesh.AddBox({-length / 2, -depth / 2, 0.f}, {length / 2, depth / 2, 0.015f}, body);
-  const int columns = 15, rows = 5;
-  const float pitch_x = (length - 0.03f) / columns, pitch_y = (depth - 0.02f) / rows;
-  for (int r = 0; r < rows; ++r) {
-    for (int c = 0; c < columns; ++c) {
-      const Eigen::Vector3f corner(-length / 2 + 0.015f + c * pitch_x,
-                                   -depth / 2 + 0.01f + r * pitch_y, 0.015f);
-      mesh.AddBox(corner + Eigen::Vector3f(0.002f, 0.002f, 0.f),
-                  corner + Eigen::Vector3f(pitch_x - 0.002f, pitch_y - 0.002f, 0.008f), keys);
-    }
-  }
-  return mesh;
-}
-
-TriangleMesh Mouse(const Rgb& color) {
-  TriangleMesh mesh;
-  mesh.AddBox({-0.03f, -0.055f, 0.f}, {0.03f, 0.055f, 0.035f}, color);
-  return mesh;
-}
-
-TriangleMesh Cup(const Rgb& color) {
-  TriangleMesh mesh;
-  mesh.AddCylinder({0.f, 0.f, 0.f}, 0.04f, 0.1f, 16, color);
-  mesh.AddBox({0.04f, -0.006f, 0.025f}, {0.065f, 0.006f, 0.075f}, color);  // handle
-  return mesh;
-}
-
-TriangleMesh Book(float length, float width, float thickness, const Rgb& color) {
-  TriangleMesh mesh;
-  mesh.AddBox({-length / 2, -width / 2, 0.f}, {length / 2, width / 2, thickness}, color);
-  return mesh;
-}
-
-TriangleMesh Laptop(const Rgb& color, const Rgb& screen) {
-  TriangleMesh mesh;
-  mesh.AddBox({-0.17f, -0.12f, 0.f}, {0.17f, 0.12f, 0.02f}, color);
-  // The lid, opened to about 105 degrees, hinged at the back edge.
-  TriangleMesh lid;
-  lid.AddBox({-0.17f, 0.f, 0.f}, {0.17f, 0.23f, 0.012f}, color);
-  lid.AddBox({-0.16f, 0.01f, -0.001f}, {0.16f, 0.22f, 0.f}, screen);
-  Eigen::Isometry3f hinge = Eigen::Isometry3f::Identity();
-  hinge.translate(Eigen::Vector3f(0.f, 0.12f, 0.02f));
-  hinge.rotate(Eigen::AngleAxisf(1.83f, Eigen::Vector3f::UnitX()));
-  mesh.Append(lid, hinge);
-  return mesh;
-}
-
-// Catalog names that may stand in for a procedural object of each class.
-const std::map<std::string, std::vector<std::string>>& CatalogNames() {
-  static const std::map<std::string, std::vector<std::string>> names = {
-      {"dining table", {"Table", "Wooden table", "Technical table", "Wooden teak table"}},
-      {"chair", {"Chair", "Chair with cushion", "Folding chair"}},
-      {"tv", {"TV", "TV 16:9", "Wall flat TV"}},
-      {"cup", {"Coffee mug", "Plastic cup"}},
-      {"book", {"Book"}},
-      {"laptop", {"Laptop"}},
-      {"potted plant", {"Plant", "Decorative plant", "Spider plant", "Succulent plant"}},
-      {"sink", {"Sink"}},
-      {"microwave", {"Microwave"}},
-      {"oven", {"Small oven"}},
-      {"refrigerator", {"Refrigerator"}},
-      {"bottle", {"Bottle", "Wine bottle"}}};
-  return names;
-}
-
 class SceneBuilder {
  public:
   SceneBuilder(Scene* scene, Random* random, const FurnitureCatalog* catalog)
@@ -159,7 +37,9 @@ class SceneBuilder {
     object.id = static_cast<int>(scene_->objects.size()) + 1;
     object.class_id = CocoClassId(class_name);
     object.name = name;
-    object.mesh = Dress(class_name, mesh, object.id, mesh_names, &object.name);
+    // The pick has a random stream of its own, so that dressing a scene moves nothing in it.
+    object.mesh = DressFromCatalog(catalog_, class_name, mesh, scene_->seed, object.id, mesh_names,
+                                   &object.name);
     object.T_W_O = Pose(position, yaw).cast<double>();
     scene_->objects.push_back(std::move(object));
   }
@@ -167,36 +47,6 @@ class SceneBuilder {
   Scene& scene() { return *scene_; }
 
  private:
-  // The pick has a random stream of its own, so that dressing a scene moves nothing in it.
-  TriangleMesh Dress(const std::string& class_name, const TriangleMesh& procedural, int id,
-                     const std::vector<std::string>* mesh_names, std::string* name) {
-    const auto names = CatalogNames().find(class_name);
-    if (catalog_ == nullptr || (mesh_names == nullptr && names == CatalogNames().end())) {
-      return procedural;
-    }
-    std::vector<const FurnitureEntry*> candidates =
-        catalog_->Named(mesh_names != nullptr ? *mesh_names : names->second);
-    candidates.erase(
-        std::remove_if(candidates.begin(), candidates.end(),
-                       [](const FurnitureEntry* e) { return e->category == "Exterior"; }),
-        candidates.end());
-    if (candidates.empty()) return procedural;
-    Random pick(scene_->seed, 0xCA7A106ull, static_cast<std::uint64_t>(id));
-    const FurnitureEntry& entry = *candidates[pick.Next() % candidates.size()];
-    TriangleMesh mesh;
-    std::string why;
-    if (!catalog_->LoadMesh(entry, &mesh, &why)) return procedural;
-    Eigen::Vector3f want_min, want_max, have_min, have_max;
-    procedural.Bounds(&want_min, &want_max);
-    mesh.Bounds(&have_min, &have_max);
-    const Eigen::Vector3f scale =
-        (want_max - want_min).cwiseQuotient((have_max - have_min).cwiseMax(1e-6f));
-    for (Eigen::Vector3f& v : mesh.vertices) v = want_min + (v - have_min).cwiseProduct(scale);
-    *name += " (" + entry.name + " by " + entry.creator + ", " +
-             std::filesystem::path(entry.archive).filename().string() + ")";
-    return mesh;
-  }
-
   Scene* scene_;
   Random* random_;
   const FurnitureCatalog* catalog_;
@@ -217,74 +67,45 @@ void AddRoom(float w, float d, float h, Random* random, TriangleMesh* structure)
 void AddDesk(SceneBuilder* b, const Eigen::Vector3f& centre, bool two_monitors) {
   Random& r = b->random();
   const float height = 0.74f, length = 1.6f, width = 0.8f;
-  b->Add("dining table", "desk", Table(length, width, height, Jitter({170, 130, 90}, &r)), centre,
-         0.f);
+  b->Add("dining table", "desk", TableMesh(length, width, height, Jitter({170, 130, 90}, &r)),
+         centre, 0.f);
   const Eigen::Vector3f top = centre + Eigen::Vector3f(0.f, 0.f, height);
   const Rgb black = Jitter({40, 40, 45}, &r), screen = Jitter({30, 60, 120}, &r);
   if (two_monitors) {
     // Side by side, a centimetre apart: the paper's "two monitors merged into one".
     const float w = static_cast<float>(r.Uniform(0.5, 0.56));
-    b->Add("tv", "left monitor", Monitor(w, 0.32f, black, screen),
+    b->Add("tv", "left monitor", MonitorMesh(w, 0.32f, black, screen),
            top + Eigen::Vector3f(-w / 2 - 0.005f, 0.2f, 0.f), 0.f);
-    b->Add("tv", "right monitor", Monitor(w, 0.32f, black, screen),
+    b->Add("tv", "right monitor", MonitorMesh(w, 0.32f, black, screen),
            top + Eigen::Vector3f(w / 2 + 0.005f, 0.2f, 0.f), 0.f);
   } else {
-    b->Add("laptop", "laptop", Laptop(Jitter({150, 150, 155}, &r), screen),
+    b->Add("laptop", "laptop", LaptopMesh(Jitter({150, 150, 155}, &r), screen),
            top + Eigen::Vector3f(0.f, 0.12f, 0.f), static_cast<float>(r.Uniform(-0.2, 0.2)));
   }
-  b->Add("keyboard", "keyboard", Keyboard(black, Jitter({70, 70, 75}, &r)),
+  b->Add("keyboard", "keyboard", KeyboardMesh(black, Jitter({70, 70, 75}, &r)),
          top + Eigen::Vector3f(static_cast<float>(r.Uniform(-0.1, 0.05)), -0.16f, 0.f),
          static_cast<float>(r.Uniform(-0.08, 0.08)));
-  b->Add("mouse", "mouse", Mouse(black), top + Eigen::Vector3f(0.33f, -0.17f, 0.f), 0.f);
+  b->Add("mouse", "mouse", MouseMesh(black), top + Eigen::Vector3f(0.33f, -0.17f, 0.f), 0.f);
   // Two cups close together (3 cm apart) at the left end.
   const Eigen::Vector3f cups = top + Eigen::Vector3f(-0.62f, -0.15f, 0.f);
-  b->Add("cup", "left cup", Cup(Jitter({230, 230, 225}, &r)), cups, 0.4f);
-  b->Add("cup", "right cup", Cup(Jitter({180, 40, 40}, &r)),
+  b->Add("cup", "left cup", CupMesh(Jitter({230, 230, 225}, &r)), cups, 0.4f);
+  b->Add("cup", "right cup", CupMesh(Jitter({180, 40, 40}, &r)),
          cups + Eigen::Vector3f(0.11f, 0.f, 0.f), 2.6f);
   // Three books stacked at the right end.
   float z = 0.f;
   for (int i = 0; i < 3; ++i) {
     const float thickness = static_cast<float>(r.Uniform(0.02, 0.04));
     b->Add("book", "book " + std::to_string(i + 1),
-           Book(0.24f - 0.02f * i, 0.17f, thickness,
-                Jitter({static_cast<std::uint8_t>(60 + 60 * i), 90,
-                        static_cast<std::uint8_t>(160 - 40 * i)},
-                       &r)),
+           BookMesh(0.24f - 0.02f * i, 0.17f, thickness,
+                    Jitter({static_cast<std::uint8_t>(60 + 60 * i), 90,
+                            static_cast<std::uint8_t>(160 - 40 * i)},
+                           &r)),
            top + Eigen::Vector3f(0.6f, 0.05f, z), static_cast<float>(r.Uniform(-0.15, 0.15)));
     z += thickness;
   }
   // A chair pushed under the desk: its seat is under the top, its back in front of the edge.
-  b->Add("chair", "desk chair", Chair(Jitter({60, 60, 70}, &r)),
+  b->Add("chair", "desk chair", ChairMesh(Jitter({60, 60, 70}, &r)),
          centre + Eigen::Vector3f(static_cast<float>(r.Uniform(-0.2, 0.2)), -0.25f, 0.f), kPi);
-}
-
-TriangleMesh Bottle(const Rgb& color) {
-  TriangleMesh mesh;
-  mesh.AddCylinder({0.f, 0.f, 0.f}, 0.035f, 0.2f, 12, color);
-  mesh.AddCylinder({0.f, 0.f, 0.2f}, 0.014f, 0.08f, 8, color);
-  return mesh;
-}
-
-// A box appliance standing on z = 0 with a darker front panel (door, window) facing -y.
-TriangleMesh Appliance(float width, float depth, float height, const Rgb& body, const Rgb& front) {
-  TriangleMesh mesh;
-  mesh.AddBox({-width / 2, -depth / 2, 0.f}, {width / 2, depth / 2, height}, body);
-  mesh.AddBox({-width / 2 + 0.03f, -depth / 2 - 0.005f, 0.04f},
-              {width / 2 - 0.03f, -depth / 2, height - 0.04f}, front);
-  return mesh;
-}
-
-// A sink basin: a rim around a recess, set into a counter top.
-TriangleMesh Sink(const Rgb& steel) {
-  TriangleMesh mesh;
-  const float w = 0.6f, d = 0.45f, rim = 0.04f, depth = 0.15f;
-  mesh.AddBox({-w / 2, -d / 2, -depth}, {w / 2, d / 2, -depth + 0.01f}, steel);  // bottom
-  mesh.AddBox({-w / 2, -d / 2, -depth}, {-w / 2 + rim, d / 2, 0.01f}, steel);
-  mesh.AddBox({w / 2 - rim, -d / 2, -depth}, {w / 2, d / 2, 0.01f}, steel);
-  mesh.AddBox({-w / 2, -d / 2, -depth}, {w / 2, -d / 2 + rim, 0.01f}, steel);
-  mesh.AddBox({-w / 2, d / 2 - rim, -depth}, {w / 2, d / 2, 0.01f}, steel);
-  mesh.AddCylinder({0.f, d / 2 - 0.05f, 0.01f}, 0.015f, 0.25f, 8, steel);  // tap
-  return mesh;
 }
 
 // A kitchen: a counter along the back wall with a sink, a microwave and bottles, a
@@ -295,25 +116,28 @@ Eigen::Vector3d AddKitchen(SceneBuilder* b, TriangleMesh* structure) {
   structure->AddBox({0.9f, 3.85f, 0.f}, {3.7f, 4.45f, counter_top}, Jitter({200, 40, 40}, &r));
   const Rgb steel = Jitter({180, 180, 185}, &r), white = Jitter({235, 235, 230}, &r);
   b->Add("refrigerator", "refrigerator",
-         Appliance(0.7f, 0.65f, 1.8f, white, Jitter({210, 210, 205}, &r)), {0.5f, 4.1f, 0.f}, 0.f);
-  b->Add("oven", "oven", Appliance(0.6f, 0.6f, 0.9f, Jitter({60, 60, 60}, &r), {20, 20, 25}),
+         ApplianceMesh(0.7f, 0.65f, 1.8f, white, Jitter({210, 210, 205}, &r)), {0.5f, 4.1f, 0.f},
+         0.f);
+  b->Add("oven", "oven", ApplianceMesh(0.6f, 0.6f, 0.9f, Jitter({60, 60, 60}, &r), {20, 20, 25}),
          {4.05f, 4.1f, 0.f}, 0.f);
-  b->Add("sink", "sink", Sink(steel), {1.8f, 4.15f, counter_top}, 0.f);
-  b->Add("microwave", "microwave", Appliance(0.5f, 0.38f, 0.3f, white, {30, 30, 35}),
+  b->Add("sink", "sink", SinkMesh(steel), {1.8f, 4.15f, counter_top}, 0.f);
+  b->Add("microwave", "microwave", ApplianceMesh(0.5f, 0.38f, 0.3f, white, {30, 30, 35}),
          {3.1f, 4.15f, counter_top}, static_cast<float>(r.Uniform(-0.1, 0.1)));
-  b->Add("bottle", "bottle 1", Bottle(Jitter({40, 120, 60}, &r)), {2.35f, 4.05f, counter_top}, 0.f);
-  b->Add("bottle", "bottle 2", Bottle(Jitter({120, 60, 30}, &r)), {2.47f, 4.1f, counter_top}, 0.f);
+  b->Add("bottle", "bottle 1", BottleMesh(Jitter({40, 120, 60}, &r)), {2.35f, 4.05f, counter_top},
+         0.f);
+  b->Add("bottle", "bottle 2", BottleMesh(Jitter({120, 60, 30}, &r)), {2.47f, 4.1f, counter_top},
+         0.f);
   const Eigen::Vector3f table(2.3f + static_cast<float>(r.Uniform(-0.2, 0.2)), 2.3f, 0.f);
-  b->Add("dining table", "kitchen table", Table(1.2f, 0.8f, 0.75f, Jitter({170, 130, 90}, &r)),
+  b->Add("dining table", "kitchen table", TableMesh(1.2f, 0.8f, 0.75f, Jitter({170, 130, 90}, &r)),
          table, 0.f);
   const Eigen::Vector3f top = table + Eigen::Vector3f(0.f, 0.f, 0.75f);
-  b->Add("cup", "left cup", Cup(Jitter({230, 230, 225}, &r)),
+  b->Add("cup", "left cup", CupMesh(Jitter({230, 230, 225}, &r)),
          top + Eigen::Vector3f(-0.2f, 0.f, 0.f), 0.3f);
-  b->Add("cup", "right cup", Cup(Jitter({40, 80, 180}, &r)),
+  b->Add("cup", "right cup", CupMesh(Jitter({40, 80, 180}, &r)),
          top + Eigen::Vector3f(-0.06f, 0.05f, 0.f), 2.8f);
-  b->Add("chair", "chair left", Chair(Jitter({110, 80, 50}, &r)),
+  b->Add("chair", "chair left", ChairMesh(Jitter({110, 80, 50}, &r)),
          table + Eigen::Vector3f(-0.3f, -0.65f, 0.f), kPi);
-  b->Add("chair", "chair right", Chair(Jitter({110, 80, 50}, &r)),
+  b->Add("chair", "chair right", ChairMesh(Jitter({110, 80, 50}, &r)),
          table + Eigen::Vector3f(0.35f, 0.65f, 0.f), 0.f);
   return Eigen::Vector3d(2.3, 3.2, 0.85);
 }
@@ -325,35 +149,35 @@ Eigen::Vector3d AddLab(SceneBuilder* b) {
   const Rgb grey = Jitter({190, 190, 185}, &r), black = Jitter({40, 40, 45}, &r);
   const Rgb screen = Jitter({30, 60, 120}, &r);
   const Eigen::Vector3f back(2.5f, 3.7f, 0.f), front(2.5f, 2.3f, 0.f);
-  b->Add("dining table", "back bench", Table(2.0f, 0.7f, 0.9f, grey), back, 0.f);
-  b->Add("dining table", "front bench", Table(1.6f, 0.7f, 0.9f, grey), front, 0.f);
+  b->Add("dining table", "back bench", TableMesh(2.0f, 0.7f, 0.9f, grey), back, 0.f);
+  b->Add("dining table", "front bench", TableMesh(1.6f, 0.7f, 0.9f, grey), front, 0.f);
   const Eigen::Vector3f back_top = back + Eigen::Vector3f(0.f, 0.f, 0.9f);
   const Eigen::Vector3f front_top = front + Eigen::Vector3f(0.f, 0.f, 0.9f);
   // Two laptops side by side on the back bench, a monitor with its keyboard and mouse.
-  b->Add("laptop", "laptop 1", Laptop(Jitter({150, 150, 155}, &r), screen),
+  b->Add("laptop", "laptop 1", LaptopMesh(Jitter({150, 150, 155}, &r), screen),
          back_top + Eigen::Vector3f(-0.7f, 0.f, 0.f), 0.1f);
-  b->Add("laptop", "laptop 2", Laptop(Jitter({90, 90, 95}, &r), screen),
+  b->Add("laptop", "laptop 2", LaptopMesh(Jitter({90, 90, 95}, &r), screen),
          back_top + Eigen::Vector3f(-0.3f, 0.f, 0.f), -0.1f);
-  b->Add("tv", "monitor", Monitor(0.55f, 0.33f, black, screen),
+  b->Add("tv", "monitor", MonitorMesh(0.55f, 0.33f, black, screen),
          back_top + Eigen::Vector3f(0.45f, 0.15f, 0.f), 0.f);
-  b->Add("keyboard", "keyboard", Keyboard(black, Jitter({70, 70, 75}, &r)),
+  b->Add("keyboard", "keyboard", KeyboardMesh(black, Jitter({70, 70, 75}, &r)),
          back_top + Eigen::Vector3f(0.42f, -0.18f, 0.f), 0.05f);
-  b->Add("mouse", "mouse", Mouse(black), back_top + Eigen::Vector3f(0.75f, -0.18f, 0.f), 0.f);
+  b->Add("mouse", "mouse", MouseMesh(black), back_top + Eigen::Vector3f(0.75f, -0.18f, 0.f), 0.f);
   // Bottles and a stack of two books on the front bench.
   for (int i = 0; i < 3; ++i) {
     b->Add("bottle", "bottle " + std::to_string(i + 1),
-           Bottle(Jitter({60, static_cast<std::uint8_t>(110 + 30 * i), 160}, &r)),
+           BottleMesh(Jitter({60, static_cast<std::uint8_t>(110 + 30 * i), 160}, &r)),
            front_top + Eigen::Vector3f(-0.5f + 0.12f * i, 0.1f, 0.f), 0.f);
   }
-  b->Add("book", "book 1", Book(0.26f, 0.19f, 0.03f, Jitter({160, 60, 40}, &r)),
+  b->Add("book", "book 1", BookMesh(0.26f, 0.19f, 0.03f, Jitter({160, 60, 40}, &r)),
          front_top + Eigen::Vector3f(0.4f, 0.f, 0.f), 0.1f);
-  b->Add("book", "book 2", Book(0.23f, 0.17f, 0.025f, Jitter({40, 60, 160}, &r)),
+  b->Add("book", "book 2", BookMesh(0.23f, 0.17f, 0.025f, Jitter({40, 60, 160}, &r)),
          front_top + Eigen::Vector3f(0.4f, 0.f, 0.03f), -0.1f);
-  b->Add("chair", "chair 1", Chair(Jitter({50, 50, 60}, &r)),
+  b->Add("chair", "chair 1", ChairMesh(Jitter({50, 50, 60}, &r)),
          back + Eigen::Vector3f(-0.5f, -0.6f, 0.f), kPi + 0.2f);
-  b->Add("chair", "chair 2", Chair(Jitter({50, 50, 60}, &r)),
+  b->Add("chair", "chair 2", ChairMesh(Jitter({50, 50, 60}, &r)),
          back + Eigen::Vector3f(0.45f, -0.65f, 0.f), kPi - 0.3f);
-  b->Add("chair", "chair 3", Chair(Jitter({50, 50, 60}, &r)),
+  b->Add("chair", "chair 3", ChairMesh(Jitter({50, 50, 60}, &r)),
          front + Eigen::Vector3f(0.2f, -0.6f, 0.f), kPi);
   return Eigen::Vector3d(2.5, 3.0, 0.9);
 }
@@ -536,12 +360,9 @@ bool MakeScene(const std::string& kind, std::uint64_t seed, int frames, Scene* s
   AddDesk(&builder, desk, /*two_monitors=*/kind == "office");
   if (kind == "office") {
     // A second chair standing free, a plant in the corner, a bookshelf's worth of structure.
-    builder.Add("chair", "visitor chair", Chair(Jitter({120, 40, 40}, &random)),
+    builder.Add("chair", "visitor chair", ChairMesh(Jitter({120, 40, 40}, &random)),
                 Eigen::Vector3f(1.2f, 2.6f, 0.f), static_cast<float>(random.Uniform(0.3, 0.9)));
-    TriangleMesh plant;
-    plant.AddCylinder({0.f, 0.f, 0.f}, 0.12f, 0.3f, 12, {150, 80, 50});
-    plant.AddCylinder({0.f, 0.f, 0.3f}, 0.22f, 0.5f, 10, {40, 130, 50});
-    builder.Add("potted plant", "plant", plant, Eigen::Vector3f(4.4f, 4.0f, 0.f), 0.f);
+    builder.Add("potted plant", "plant", PottedPlantMesh(), Eigen::Vector3f(4.4f, 4.0f, 0.f), 0.f);
     scene->structure.AddBox({0.05f, 3.7f, 0.f}, {1.0f, 4.45f, 1.8f},
                             Jitter({140, 110, 80}, &random));
   }
