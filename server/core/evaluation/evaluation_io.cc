@@ -1,6 +1,7 @@
 #include "evaluation/evaluation_io.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -193,14 +194,123 @@ bool ReadMappedObject(const Json& entry, const fs::path& dir, const std::string&
     return false;
   }
   if (!*claimed) return true;
-  const fs::path ply =
-      from_map
-          ? dir / "objects" / ObjectModelFileName(object->id, object->class_id)
-          : dir / entry.value("ply", std::string());
+  const fs::path ply = from_map
+                           ? dir / "objects" / ObjectModelFileName(object->id, object->class_id)
+                           : dir / entry.value("ply", std::string());
   std::error_code error;
   if (!fs::is_regular_file(ply, error)) return true;  // no model: no model accuracy
   std::vector<std::array<std::uint8_t, 3>> colors;
   return ReadPly(ply.string(), &object->model_W, &colors, why);
+}
+
+// A change file's "format": the simulator's and the map's files look alike, and one given for
+// the other must be refused, not scored.
+bool CheckFormat(const Json& document, const std::string& path, const std::string& format,
+                 std::string* why) {
+  if (!document.is_object()) {
+    *why = path + ": expected a JSON object with \"format\": \"" + format + "\"";
+    return false;
+  }
+  if (!document.contains("format") || !document["format"].is_string()) {
+    *why = path + ": \"format\" (\"" + format + "\") is missing";
+    return false;
+  }
+  const std::string found = document["format"].get<std::string>();
+  if (found != format) {
+    *why = path + ": \"format\" is '" + found + "', expected '" + format + "'";
+    return false;
+  }
+  return true;
+}
+
+bool PlaceOf(const Json& entry, const char* field, const std::string& where, Eigen::Vector3d* v,
+             std::string* why) {
+  if (!entry.contains(field) || !Vector3(entry[field], v)) {
+    *why = where + ": \"" + field + "\" must be 3 finite numbers (metres)";
+    return false;
+  }
+  return true;
+}
+
+bool ReadGroundTruthChange(const Json& entry, ChangeKind kind, const std::string& where,
+                           GroundTruthChange* change, std::string* why) {
+  if (!entry.is_object() || !entry.contains("id") || !entry["id"].is_number_integer()) {
+    *why = where + ": \"id\" (an integer) is missing";
+    return false;
+  }
+  change->kind = kind;
+  change->id = entry["id"].get<int>();
+  if (!ClassOf(entry, where, /*allow_unknown=*/false, &change->class_id, why)) return false;
+  if (kind != ChangeKind::kMoved) {
+    return PlaceOf(entry, "position", where, &change->position_W, why);
+  }
+  return PlaceOf(entry, "from", where, &change->from_W, why) &&
+         PlaceOf(entry, "to", where, &change->position_W, why);
+}
+
+bool KindOf(const Json& entry, const std::string& where, ChangeKind* kind, std::string* why) {
+  if (entry.contains("kind") && entry["kind"].is_string()) {
+    for (ChangeKind k : kChangeKinds) {
+      if (entry["kind"].get<std::string>() == ChangeKindName(k)) {
+        *kind = k;
+        return true;
+      }
+    }
+  }
+  *why = where + ": \"kind\" must be \"added\", \"removed\" or \"moved\"";
+  return false;
+}
+
+bool IntegerOf(const Json& entry, const char* field, const std::string& where, std::int64_t* value,
+               std::string* why) {
+  if (!entry.contains(field)) {
+    *why = where + ": \"" + field + "\" (an integer) is missing";
+    return false;
+  }
+  if (!entry[field].is_number_integer()) {
+    *why = where + ": \"" + field + "\" must be an integer";
+    return false;
+  }
+  *value = entry[field].get<std::int64_t>();
+  return true;
+}
+
+bool ReadReportedChange(const Json& entry, const std::string& where, ReportedChange* change,
+                        std::string* why) {
+  if (!entry.is_object()) {
+    *why = where + ": expected an object";
+    return false;
+  }
+  if (!KindOf(entry, where, &change->kind, why) ||
+      !IntegerOf(entry, "object_id", where, &change->object_id, why) ||
+      !ClassOf(entry, where, /*allow_unknown=*/true, &change->class_id, why) ||
+      !PlaceOf(entry, "position", where, &change->position_W, why)) {
+    return false;
+  }
+  // A map that knows no sessions writes none; --since-session then has nothing to go by.
+  if (entry.contains("session_id") &&
+      !IntegerOf(entry, "session_id", where, &change->session_id, why)) {
+    return false;
+  }
+  if (change->kind == ChangeKind::kMoved && !PlaceOf(entry, "from", where, &change->from_W, why)) {
+    return false;
+  }
+  if (entry.contains("keyframe_id") &&
+      !IntegerOf(entry, "keyframe_id", where, &change->keyframe_id, why)) {
+    return false;
+  }
+  if (entry.contains("stamp")) {
+    if (!entry["stamp"].is_number() || !std::isfinite(entry["stamp"].get<double>())) {
+      *why = where + ": \"stamp\" must be a finite number (seconds)";
+      return false;
+    }
+    change->stamp = entry["stamp"].get<double>();
+  }
+  if (entry.contains("min") || entry.contains("max")) {
+    return PlaceOf(entry, "min", where, &change->min_W, why) &&
+           PlaceOf(entry, "max", where, &change->max_W, why);
+  }
+  return true;
 }
 
 }  // namespace
@@ -297,6 +407,57 @@ bool ReadMapDirectory(const std::string& dir, std::vector<MappedObject>* objects
       return false;
     }
     if (claimed) objects->push_back(std::move(object));
+  }
+  return true;
+}
+
+bool ReadGroundTruthChanges(const std::string& path, std::vector<GroundTruthChange>* changes,
+                            std::string* why) {
+  changes->clear();
+  Json document;
+  if (!ParseFile(path, &document, why) || !CheckFormat(document, path, "objmap-changes-1", why)) {
+    return false;
+  }
+  for (ChangeKind kind : kChangeKinds) {
+    const std::string name(ChangeKindName(kind));
+    if (!document.contains(name)) continue;  // nothing of this kind changed
+    const Json& entries = document[name];
+    if (!entries.is_array()) {
+      *why = path + ": \"" + name + "\" must be an array";
+      return false;
+    }
+    for (std::size_t i = 0; i < entries.size(); ++i) {
+      GroundTruthChange change;
+      const std::string where = path + ": " + name + "[" + std::to_string(i) + "]";
+      if (!ReadGroundTruthChange(entries[i], kind, where, &change, why)) {
+        return false;
+      }
+      changes->push_back(change);
+    }
+  }
+  return true;
+}
+
+bool ReadReportedChanges(const std::string& path, std::vector<ReportedChange>* changes,
+                         std::string* why) {
+  changes->clear();
+  Json document;
+  if (!ParseFile(path, &document, why) ||
+      !CheckFormat(document, path, "objmap-map-changes-1", why)) {
+    return false;
+  }
+  if (!document.contains("changes") || !document["changes"].is_array()) {
+    *why = path + ": \"changes\" (an array) is missing";
+    return false;
+  }
+  const Json& entries = document["changes"];
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    ReportedChange change;
+    if (!ReadReportedChange(entries[i], path + ": changes[" + std::to_string(i) + "]", &change,
+                            why)) {
+      return false;
+    }
+    changes->push_back(change);
   }
   return true;
 }

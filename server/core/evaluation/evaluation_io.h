@@ -1,11 +1,13 @@
 #pragma once
-// The files of an evaluation: ground truth, expected counts, and the objects a map directory
-// claims. Every reader answers false with a reason naming the file and the entry.
+// The files of an evaluation: ground truth, expected counts, the objects a map directory
+// claims, and the changes between two sessions, real and reported. Every reader answers false
+// with a reason naming the file and the entry.
 
 #include <map>
 #include <string>
 #include <vector>
 
+#include "evaluation/change_evaluation.h"
 #include "evaluation/evaluation.h"
 
 namespace objmap {
@@ -37,5 +39,28 @@ namespace objmap {
 /// (objects.json with "confirmed" and "ply"): its inventory objects, with their models.
 [[nodiscard]] bool ReadMapDirectory(const std::string& dir, std::vector<MappedObject>* objects,
                                     std::string* why);
+
+/// The changes a simulated scene went through between two sessions (changes.json in the second
+/// session's folder):
+///   {"format": "objmap-changes-1", "kind": "office", "seed": 3,
+///    "removed": [{"id": 4, "class": "cup", "position": [x, y, z]}, ...],
+///    "moved":   [{"id": 7, "class": "chair", "from": [x, y, z], "to": [x, y, z]}, ...],
+///    "added":   [{"id": 21, "class": "book", "position": [x, y, z]}, ...]}
+/// (box centres in the world frame, metres; ids of the ground truth; COCO class names; a kind
+/// with no changes may be left out; other keys such as "name" are ignored).
+[[nodiscard]] bool ReadGroundTruthChanges(const std::string& path,
+                                          std::vector<GroundTruthChange>* changes,
+                                          std::string* why);
+
+/// The changes a map reports (changes.json in a folder written by `objmap map --map`):
+///   {"format": "objmap-map-changes-1",
+///    "changes": [{"kind": "added" | "removed" | "moved", "object_id": 12, "class": "cup",
+///                 "session_id": 2, "keyframe_id": 57, "stamp": 12.3,
+///                 "position": [x, y, z], "from": [x, y, z] (moved only),
+///                 "min": [x, y, z], "max": [x, y, z]}, ...]}
+/// "session_id", "keyframe_id", "stamp", "min" and "max" are optional; "class" may also be
+/// "unknown".
+[[nodiscard]] bool ReadReportedChanges(const std::string& path,
+                                       std::vector<ReportedChange>* changes, std::string* why);
 
 }  // namespace objmap
