@@ -95,6 +95,18 @@ void VisitMapModel(MapperConfig* m, Visitor& v) {
   v("unknown_view_score", &i.unknown_view_score);
   v("unknown_min_views", &i.unknown_min_views);
   v("count_unknown", &i.count_unknown);
+  ChangeConfig& c = m->changes;
+  v.Section("changes");
+  v("enabled", &c.enabled);
+  v("see_through_margin_m", &c.see_through_margin_m);
+  v("see_through_margin_per_m2", &c.see_through_margin_per_m2);
+  v("min_visible_fraction", &c.min_visible_fraction);
+  v("min_projected_area_px", &c.min_projected_area_px);
+  v("min_empty_fraction", &c.min_empty_fraction);
+  v("min_empty_views", &c.min_empty_views);
+  v("max_move_size_ratio", &c.max_move_size_ratio);
+  v("min_move_distance_m", &c.min_move_distance_m);
+  v("max_move_colour_distance", &c.max_move_colour_distance);
   UnknownObjectConfig& u = m->unknown_objects;
   v.Section("unknown_objects");
   v("enabled", &u.enabled);

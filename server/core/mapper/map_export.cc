@@ -53,36 +53,89 @@ nlohmann::json ObjectJson(const MapObject& object, bool confirmed, bool in_inven
           {"model_points", object.model_W.size()}};
 }
 
-std::set<ObjectId> ConfirmedIds(const Mapper& mapper) {
-  std::set<ObjectId> ids;
-  for (const MapObject* object : mapper.ConfirmedObjects()) ids.insert(object->id);
-  return ids;
+nlohmann::json PlaceJson(const ObjectPlace& place) {
+  return {{"centroid", Vector(place.centroid_W)},  {"bbox_min", Vector(place.min_W)},
+          {"bbox_max", Vector(place.max_W)},       {"first_seen_keyframe", place.first_seen},
+          {"last_seen_keyframe", place.last_seen}, {"seen_empty_keyframe", place.seen_empty_at}};
 }
 
 }  // namespace
 
 std::string ObjectsJson(const Mapper& mapper) {
-  const std::set<ObjectId> confirmed = ConfirmedIds(mapper);
+  const ObjectChanges changes = mapper.Changes();
+  std::set<ObjectId> confirmed;
+  for (const MapObject* object : mapper.ConfirmedObjects(changes)) confirmed.insert(object->id);
   nlohmann::json objects = nlohmann::json::array();
   for (const auto& [id, object] : mapper.objects().objects()) {
+    if (changes.gone.count(id) > 0) continue;
     const bool is_confirmed = confirmed.count(id) > 0;
     const bool counted = is_confirmed && (object.Label() != kUnknownClassId ||
                                           mapper.config().inventory.count_unknown);
-    objects.push_back(ObjectJson(object, is_confirmed, counted, mapper.Evidence(object)));
+    nlohmann::json json = ObjectJson(object, is_confirmed, counted, mapper.Evidence(object));
+    const ObjectId published = changes.PublishedId(id);
+    json["id"] = published;
+    json["state"] = "present";
+    const auto history = changes.histories.find(published);
+    if (history != changes.histories.end()) {
+      json["state"] = ObjectStateName(history->second.state);
+      nlohmann::json before = nlohmann::json::array();
+      for (std::size_t i = 0; i + 1 < history->second.places.size(); ++i) {
+        before.push_back(PlaceJson(history->second.places[i]));
+      }
+      json["previous_places"] = before;
+      if (history->second.added_at != 0) json["added_keyframe"] = history->second.added_at;
+    }
+    objects.push_back(std::move(json));
+  }
+  nlohmann::json removed = nlohmann::json::array();
+  for (const auto& [id, history] : changes.histories) {
+    if (history.state != ObjectState::kRemoved) continue;
+    nlohmann::json places = nlohmann::json::array();
+    for (const ObjectPlace& place : history.places) places.push_back(PlaceJson(place));
+    removed.push_back({{"id", id},
+                       {"class", std::string(ObjectClassName(history.class_id))},
+                       {"places", places}});
   }
   nlohmann::json inventory = nlohmann::json::array();
-  for (const InventoryEntry& entry : mapper.Inventory()) {
+  for (const InventoryEntry& entry :
+       InventoryOf(mapper.ConfirmedObjects(changes), mapper.config().inventory.count_unknown)) {
+    std::vector<ObjectId> ids;
+    for (ObjectId id : entry.objects) ids.push_back(changes.PublishedId(id));
     inventory.push_back({{"class", std::string(ObjectClassName(entry.class_id))},
                          {"count", entry.count},
                          {"mean_confidence", entry.mean_confidence},
-                         {"objects", entry.objects}});
+                         {"objects", ids}});
   }
-  return nlohmann::json{
-      {"keyframes", mapper.num_keyframes()}, {"inventory", inventory}, {"objects", objects}}
+  return nlohmann::json{{"keyframes", mapper.num_keyframes()},
+                        {"inventory", inventory},
+                        {"objects", objects},
+                        {"removed", removed}}
       .dump(2);
 }
 
-bool WriteMapOutputs(const Mapper& mapper, const std::string& out_dir, std::string* why) {
+std::string ChangesJson(const Mapper& mapper, const KeyframeWhenLookup& when) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const ObjectChange& change : ChangeList(mapper.Changes())) {
+    nlohmann::json json = {{"kind", ChangeKindName(change.kind)},
+                           {"object_id", change.id},
+                           {"class", std::string(ObjectClassName(change.class_id))},
+                           {"keyframe_id", change.keyframe_id},
+                           {"position", Vector(change.centroid_W)},
+                           {"min", Vector(change.min_W)},
+                           {"max", Vector(change.max_W)}};
+    if (change.kind == ObjectChange::Kind::kMoved) json["from"] = Vector(change.from_W);
+    if (when) {
+      const KeyframeWhen at = when(change.keyframe_id);
+      json["session_id"] = at.session_id;
+      json["stamp"] = at.stamp_s;
+    }
+    list.push_back(std::move(json));
+  }
+  return nlohmann::json{{"format", "objmap-map-changes-1"}, {"changes", list}}.dump(2);
+}
+
+bool WriteMapOutputs(const Mapper& mapper, const std::string& out_dir, std::string* why,
+                     const KeyframeWhenLookup& when) {
   namespace fs = std::filesystem;
   std::error_code error;
   fs::create_directories(fs::path(out_dir) / "objects", error);
@@ -98,15 +151,24 @@ bool WriteMapOutputs(const Mapper& mapper, const std::string& out_dir, std::stri
     *why = json_path + ": write failed";
     return false;
   }
+  const std::string changes_path = out_dir + "/changes.json";
+  std::ofstream changes(changes_path);
+  changes << ChangesJson(mapper, when) << "\n";
+  if (!changes) {
+    *why = changes_path + ": write failed";
+    return false;
+  }
   // A folder written again (a run added to a map folder) keeps no model of an object that has
   // since been merged, relabelled or dropped from the inventory.
   for (const fs::directory_entry& entry : fs::directory_iterator(fs::path(out_dir) / "objects")) {
     if (entry.path().extension() == ".ply") fs::remove(entry.path(), error);
   }
-  for (const MapObject* object : mapper.ConfirmedObjects()) {
+  const ObjectChanges object_changes = mapper.Changes();
+  for (const MapObject* object : mapper.ConfirmedObjects(object_changes)) {
     const ColoredPoints model = mapper.objects().ModelPoints(*object);
     const std::string path =
-        out_dir + "/objects/" + ObjectModelFileName(object->id, object->Label());
+        out_dir + "/objects/" +
+        ObjectModelFileName(object_changes.PublishedId(object->id), object->Label());
     if (!WritePly(path, model.points, model.colors, why)) return false;
   }
   return true;

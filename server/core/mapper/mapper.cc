@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <iterator>
+#include <limits>
 #include <mutex>
 #include <optional>
 #include <set>
@@ -213,7 +214,8 @@ bool MapperConfig::IsValid(std::string* why) const {
   if (!unknown_objects.IsValid(why)) return false;
   if (!segmenter.IsValid(why) || !detection_segment.IsValid(why) || !association.IsValid(why) ||
       !objects.IsValid(why) || !occupancy.IsValid(why) || !inventory.IsValid(why) ||
-      !reassociation.IsValid(why) || !regeneration.IsValid(why) || !views.IsValid(why)) {
+      !changes.IsValid(why) || !reassociation.IsValid(why) || !regeneration.IsValid(why) ||
+      !views.IsValid(why)) {
     return false;
   }
   if (!(min_detection_score >= 0.f && min_detection_score <= 1.f)) {
@@ -282,6 +284,9 @@ struct Mapper::Impl {
   mutable std::map<ObjectId, ObjectVisibilityCache> visibility_cache;
 
   const std::map<KeyframeId, ObjectVisibility>& VisibilityOf(const MapObject& object) const;
+  // The inventory thresholds, with what the keyframes up to `through` saw of the object.
+  bool IsConfirmedThrough(const MapObject& object, KeyframeId through) const;
+  void DropStaleVisibility() const;
 
   // The independent view of every keyframe (ViewGroupingConfig), extended keyframe by keyframe
   // and recomputed when poses change; the first keyframe of the latest view is its anchor.
@@ -313,7 +318,7 @@ const std::map<KeyframeId, ObjectVisibility>& Mapper::Impl::VisibilityOf(
     for (auto it = keyframes.upper_bound(cache.evaluated_through); it != keyframes.end(); ++it) {
       const KeyframeRecord& record = it->second;
       const ObjectVisibility seen = VisibilityIn(samples, bounds_W, record.T_W_C, record.intrinsics,
-                                                 record.depth_mm, config.inventory);
+                                                 record.depth_mm, config.inventory, config.changes);
       if (seen.visible_fraction > 0.f) cache.seen[it->first] = seen;
     }
     cache.evaluated_through = keyframes.rbegin()->first;
@@ -516,8 +521,7 @@ void Mapper::Impl::RegenerateOccupancy(const std::map<KeyframeId, Eigen::Isometr
   }
   occupancy.Rewrite([&](OccupancyMap* map) {
     map->RegenerateWhereReached(
-        changed, reaching.size(),
-        [&reaching](std::size_t i) { return DepthScanOf(*reaching[i]); },
+        changed, reaching.size(), [&reaching](std::size_t i) { return DepthScanOf(*reaching[i]); },
         config.regeneration.threads);
     return true;
   });
@@ -670,26 +674,58 @@ ObjectEvidence Mapper::Evidence(const MapObject& object) const {
                     impl_->config.inventory);
 }
 
-std::vector<const MapObject*> Mapper::ConfirmedObjects() const {
-  const InventoryConfig& thresholds = impl_->config.inventory;
-  const std::map<KeyframeId, int>& views = impl_->view_of_keyframe;
-  // Objects merged away or re-associated since: their cached visibility is of no use.
-  for (auto it = impl_->visibility_cache.begin(); it != impl_->visibility_cache.end();) {
-    it = impl_->objects.Find(it->first) == nullptr ? impl_->visibility_cache.erase(it)
-                                                   : std::next(it);
+bool Mapper::Impl::IsConfirmedThrough(const MapObject& object, KeyframeId through) const {
+  const InventoryConfig& thresholds = config.inventory;
+  // An unknown object has no class score to be confident of; its views stand for it.
+  const bool unknown = object.Label() == kUnknownClassId;
+  if (static_cast<int>(object.observations.size()) < thresholds.min_observations ||
+      (!unknown && object.Confidence() < thresholds.min_confidence)) {
+    return false;
   }
+  const std::map<KeyframeId, ObjectVisibility>& all = VisibilityOf(object);
+  std::map<KeyframeId, ObjectVisibility> until;
+  const bool whole = all.empty() || all.rbegin()->first <= through;
+  if (!whole) until.insert(all.begin(), all.upper_bound(through));
+  const ObjectEvidence evidence =
+      EvidenceOf(object, whole ? all : until, view_of_keyframe, thresholds);
+  if (unknown && evidence.views_detecting < thresholds.unknown_min_views) return false;
+  return evidence.evidence >= thresholds.min_evidence;
+}
+
+void Mapper::Impl::DropStaleVisibility() const {
+  // Objects merged away or re-associated since: their cached visibility is of no use.
+  for (auto it = visibility_cache.begin(); it != visibility_cache.end();) {
+    it = objects.Find(it->first) == nullptr ? visibility_cache.erase(it) : std::next(it);
+  }
+}
+
+ObjectChanges Mapper::Changes() const {
+  impl_->DropStaleVisibility();
+  ChangeInputs inputs;
+  inputs.objects = &impl_->objects;
+  inputs.view_of_keyframe = &impl_->view_of_keyframe;
+  inputs.visibility_of =
+      [this](const MapObject& object) -> const std::map<KeyframeId, ObjectVisibility>& {
+    return impl_->VisibilityOf(object);
+  };
+  inputs.confirmed_through = [this](const MapObject& object, KeyframeId through) {
+    return impl_->IsConfirmedThrough(object, through);
+  };
+  return DetectChanges(inputs, impl_->config.changes);
+}
+
+std::vector<const MapObject*> Mapper::ConfirmedObjects() const {
+  return ConfirmedObjects(Changes());
+}
+
+std::vector<const MapObject*> Mapper::ConfirmedObjects(const ObjectChanges& changes) const {
+  impl_->DropStaleVisibility();
   std::vector<const MapObject*> confirmed;
   for (const auto& [id, object] : impl_->objects.objects()) {
-    // An unknown object has no class score to be confident of; its views stand for it.
-    const bool unknown = object.Label() == kUnknownClassId;
-    if (static_cast<int>(object.observations.size()) < thresholds.min_observations ||
-        (!unknown && object.Confidence() < thresholds.min_confidence)) {
-      continue;
+    if (changes.gone.count(id) > 0) continue;
+    if (impl_->IsConfirmedThrough(object, std::numeric_limits<KeyframeId>::max())) {
+      confirmed.push_back(&object);
     }
-    const ObjectEvidence evidence =
-        EvidenceOf(object, impl_->VisibilityOf(object), views, thresholds);
-    if (unknown && evidence.views_detecting < thresholds.unknown_min_views) continue;
-    if (evidence.evidence >= thresholds.min_evidence) confirmed.push_back(&object);
   }
   return confirmed;
 }
@@ -717,7 +753,13 @@ std::vector<InventoryEntry> InventoryOf(const std::vector<const MapObject*>& obj
 }
 
 std::vector<InventoryEntry> Mapper::Inventory() const {
-  return InventoryOf(ConfirmedObjects(), impl_->config.inventory.count_unknown);
+  const ObjectChanges changes = Changes();
+  std::vector<InventoryEntry> inventory =
+      InventoryOf(ConfirmedObjects(changes), impl_->config.inventory.count_unknown);
+  for (InventoryEntry& entry : inventory) {
+    for (ObjectId& id : entry.objects) id = changes.PublishedId(id);
+  }
+  return inventory;
 }
 
 const ObjectMap& Mapper::objects() const { return impl_->objects; }

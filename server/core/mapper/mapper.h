@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "association/associator.h"
+#include "mapper/object_changes.h"
 #include "mapper/object_evidence.h"
 #include "objects/object_map.h"
 #include "occupancy/occupancy_map.h"
@@ -86,6 +87,7 @@ struct MapperConfig {
   ObjectMapConfig objects;
   OccupancyConfig occupancy;
   InventoryConfig inventory;
+  ChangeConfig changes;
   ViewGroupingConfig views;
   ReassociationConfig reassociation;
   RegenerationConfig regeneration;
@@ -284,8 +286,17 @@ class Mapper {
   [[nodiscard]] ObjectEvidence Evidence(const MapObject& object) const;
 
   /// Objects that pass the inventory thresholds (evidence, confidence), by id; unknown objects
-  /// among them once enough views segmented them (InventoryConfig::unknown_min_views).
+  /// among them once enough views segmented them (InventoryConfig::unknown_min_views). Objects
+  /// whose place was seen empty since (Changes().gone) are not among them.
   [[nodiscard]] std::vector<const MapObject*> ConfirmedObjects() const;
+  /// The same with the changes already computed (Changes() projects every object into every
+  /// keyframe; callers that need both compute them once).
+  [[nodiscard]] std::vector<const MapObject*> ConfirmedObjects(const ObjectChanges& changes) const;
+
+  /// What changed over the keyframes (MapperConfig::changes): removed, moved and added objects,
+  /// and the ids the objects are published under. Derived from the keyframes and observations
+  /// (a Restore gives the same changes); the visibility behind it is cached as for Evidence.
+  [[nodiscard]] ObjectChanges Changes() const;
   /// Per-class counts of the confirmed objects, most frequent first.
   [[nodiscard]] std::vector<InventoryEntry> Inventory() const;
 

@@ -37,6 +37,39 @@ bool InventoryConfig::IsValid(std::string* why) const {
   return true;
 }
 
+bool ChangeConfig::IsValid(std::string* why) const {
+  if (!(see_through_margin_m >= 0.f) || !(see_through_margin_per_m2 >= 0.f)) {
+    *why = "ChangeConfig: see_through_margin_m and see_through_margin_per_m2 must be >= 0";
+    return false;
+  }
+  if (!(min_visible_fraction > 0.f && min_visible_fraction <= 1.f) ||
+      !(min_empty_fraction > 0.f && min_empty_fraction <= 1.f)) {
+    *why = "ChangeConfig: min_visible_fraction and min_empty_fraction must be in (0, 1]";
+    return false;
+  }
+  if (!(min_projected_area_px >= 0.f) || min_empty_views < 1) {
+    *why = "ChangeConfig: min_projected_area_px must be >= 0 and min_empty_views >= 1";
+    return false;
+  }
+  if (!(max_move_size_ratio >= 1.f) || !(min_move_distance_m >= 0.f) ||
+      !(max_move_colour_distance >= 0.f)) {
+    *why =
+        "ChangeConfig: max_move_size_ratio must be >= 1, min_move_distance_m and "
+        "max_move_colour_distance >= 0";
+    return false;
+  }
+  return true;
+}
+
+bool CouldJudgePlace(const ObjectVisibility& seen, const ChangeConfig& config) {
+  return seen.visible_fraction >= config.min_visible_fraction &&
+         seen.projected_area_px >= config.min_projected_area_px;
+}
+
+bool SawPlaceEmpty(const ObjectVisibility& seen, const ChangeConfig& config) {
+  return CouldJudgePlace(seen, config) && seen.empty_fraction >= config.min_empty_fraction;
+}
+
 bool ViewGroupingConfig::IsValid(std::string* why) const {
   if (!(translation_m >= 0.f) || !(rotation_deg >= 0.f)) {
     *why = "ViewGroupingConfig: translation_m and rotation_deg must be >= 0";
@@ -54,9 +87,8 @@ bool ViewGroupingConfig::SameView(const Eigen::Isometry3d& anchor_W_C,
 
 std::vector<Eigen::Vector3f> VisibilitySamples(const MapObject& object, int max_points) {
   const std::size_t size = object.model_W.size();
-  const std::size_t step =
-      std::max<std::size_t>(1, (size + static_cast<std::size_t>(max_points) - 1) /
-                                   static_cast<std::size_t>(max_points));
+  const std::size_t step = std::max<std::size_t>(
+      1, (size + static_cast<std::size_t>(max_points) - 1) / static_cast<std::size_t>(max_points));
   std::vector<Eigen::Vector3f> samples;
   samples.reserve(std::min(size, static_cast<std::size_t>(max_points)));
   std::size_t index = 0;
@@ -71,7 +103,7 @@ ObjectVisibility VisibilityIn(const std::vector<Eigen::Vector3f>& samples_W,
                               const Eigen::AlignedBox3f& bounds_W, const Eigen::Isometry3d& T_W_C,
                               const CameraIntrinsics& intrinsics,
                               const std::vector<std::uint16_t>& depth_mm,
-                              const InventoryConfig& config) {
+                              const InventoryConfig& config, const ChangeConfig& changes) {
   ObjectVisibility visibility;
   if (samples_W.empty()) return visibility;
   const Eigen::Isometry3f T_C_W = T_W_C.inverse().cast<float>();
@@ -79,7 +111,7 @@ ObjectVisibility VisibilityIn(const std::vector<Eigen::Vector3f>& samples_W,
   const float fx = static_cast<float>(intrinsics.fx), fy = static_cast<float>(intrinsics.fy);
   const float cx = static_cast<float>(intrinsics.cx), cy = static_cast<float>(intrinsics.cy);
   const int width = intrinsics.width, height = intrinsics.height;
-  int visible = 0;
+  int visible = 0, seen_through = 0;
   int u_min = width, u_max = -1, v_min = height, v_max = -1;
   for (const Eigen::Vector3f& p_W : samples_W) {
     const Eigen::Vector3f p_C = T_C_W * p_W;
@@ -104,6 +136,9 @@ ObjectVisibility VisibilityIn(const std::vector<Eigen::Vector3f>& samples_W,
       if (!bounds_W.contains(T_W_C_f * measured_C)) continue;
     }
     ++visible;
+    const float see_through_m =
+        changes.see_through_margin_m + changes.see_through_margin_per_m2 * measured_m * measured_m;
+    if (measured_m > p_C.z() + see_through_m) ++seen_through;
     u_min = std::min(u_min, u);
     u_max = std::max(u_max, u);
     v_min = std::min(v_min, v);
@@ -112,6 +147,7 @@ ObjectVisibility VisibilityIn(const std::vector<Eigen::Vector3f>& samples_W,
   visibility.visible_fraction = static_cast<float>(visible) / static_cast<float>(samples_W.size());
   if (visible > 0) {
     visibility.projected_area_px = static_cast<float>((u_max - u_min + 1) * (v_max - v_min + 1));
+    visibility.empty_fraction = static_cast<float>(seen_through) / static_cast<float>(visible);
   }
   return visibility;
 }

@@ -30,13 +30,13 @@ struct ViewGroupingConfig {
                               const Eigen::Isometry3d& T_W_C) const;
 };
 
-/// Which objects count in the inventory. Each independent view (ViewGroupingConfig) adds, for an object it could
-/// see, the mean over its keyframes of: the detection score where the object was detected, and
-/// -miss_weight x visible fraction x detectability where it was visible and not detected.
-/// Keyframes that could not see the object (outside the image, occluded, no depth) add nothing.
-/// The object is in the inventory when that evidence reaches min_evidence: one good close view
-/// of a mug can do it, thirty views of a rare false detection among many views that see the same
-/// place cannot.
+/// Which objects count in the inventory. Each independent view (ViewGroupingConfig) adds, for an
+/// object it could see, the mean over its keyframes of: the detection score where the object was
+/// detected, and -miss_weight x visible fraction x detectability where it was visible and not
+/// detected. Keyframes that could not see the object (outside the image, occluded, no depth) add
+/// nothing. The object is in the inventory when that evidence reaches min_evidence: one good close
+/// view of a mug can do it, thirty views of a rare false detection among many views that see the
+/// same place cannot.
 struct InventoryConfig {
   /// Evidence an object needs (one detection with score s alone gives s).
   float min_evidence = 0.3f;
@@ -78,6 +78,42 @@ struct InventoryConfig {
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
 
+/// When the map says an object was removed, moved or added (DetectChanges). A keyframe saw an
+/// object's place empty when it had enough of it in view and measured depth well behind most of
+/// its visible points: the sensor looked through where the object was. Detector misses alone
+/// never remove an object (a detector misses things that are there); an object whose surface
+/// the depth still shows is there, detected or not.
+struct ChangeConfig {
+  bool enabled = true;
+  /// A point is seen through when the measured depth lies more than this (plus per_m2 x depth
+  /// squared: the sensor's noise grows with the square of the range) behind it, metres.
+  float see_through_margin_m = 0.03f;
+  float see_through_margin_per_m2 = 0.005f;
+  /// A view judges a place only when this share of the object's sample points is in view
+  /// (ObjectVisibility::visible_fraction) ...
+  float min_visible_fraction = 0.3f;
+  /// ... covering at least this many pixels (the box around them): fewer are too few to tell
+  /// an empty place from depth noise at an object's border.
+  float min_projected_area_px = 400.f;
+  /// A view saw the place empty when at least this share of its visible points was seen through.
+  float min_empty_fraction = 0.5f;
+  /// Independent views (ViewGroupingConfig) that must have seen a place empty: after an
+  /// object's last sighting to call it removed, before its first sighting to call it added.
+  int min_empty_views = 2;
+  /// A removed object and an object that appeared later are one object moved when they have
+  /// one label, their models' sizes (the two largest extents of the bounding boxes) differ by at
+  /// most this factor each, and they lie at least min_move_distance_m apart (nearer, the
+  /// association would have kept them one object).
+  float max_move_size_ratio = 1.6f;
+  float min_move_distance_m = 0.2f;
+  /// ... and their models' mean colours (RGB, 0..255 per channel) lie at most this far apart
+  /// (Euclidean): a red mug taken away and a white one put down elsewhere are two changes, not
+  /// one move. Lenient: light and the side seen change the mean. 0: colour is not compared.
+  float max_move_colour_distance = 70.f;
+
+  [[nodiscard]] bool IsValid(std::string* why) const;
+};
+
 /// What one keyframe could see of an object.
 struct ObjectVisibility {
   /// Share of the object's sample points that project into the image with depth measured at or
@@ -85,6 +121,9 @@ struct ObjectVisibility {
   float visible_fraction = 0.f;
   /// Area of the pixel box around the visible points.
   float projected_area_px = 0.f;
+  /// Share of the visible points with depth measured well behind them (ChangeConfig's
+  /// see-through margin): the view looked through the place where those points were.
+  float empty_fraction = 0.f;
 };
 
 /// Evenly spaced points of the object's model, at most `max_points`.
@@ -92,13 +131,21 @@ struct ObjectVisibility {
                                                              int max_points);
 
 /// How much of `samples_W` (points of an object within `bounds_W`) a keyframe with this pose,
-/// intrinsics and depth (millimetres, row-major, 0: none) sees.
+/// intrinsics and depth (millimetres, row-major, 0: none) sees, and how much of that it sees
+/// through (`changes`' margins).
 [[nodiscard]] ObjectVisibility VisibilityIn(const std::vector<Eigen::Vector3f>& samples_W,
                                             const Eigen::AlignedBox3f& bounds_W,
                                             const Eigen::Isometry3d& T_W_C,
                                             const CameraIntrinsics& intrinsics,
                                             const std::vector<std::uint16_t>& depth_mm,
-                                            const InventoryConfig& config);
+                                            const InventoryConfig& config,
+                                            const ChangeConfig& changes = ChangeConfig{});
+
+/// True when the keyframe saw the object's place empty (ChangeConfig).
+[[nodiscard]] bool SawPlaceEmpty(const ObjectVisibility& seen, const ChangeConfig& config);
+/// True when the keyframe had enough of the object in view to judge its place
+/// (ChangeConfig::min_visible_fraction, min_projected_area_px).
+[[nodiscard]] bool CouldJudgePlace(const ObjectVisibility& seen, const ChangeConfig& config);
 
 /// Groups keyframes (ascending ids, with their poses) into independent views (ViewGroupingConfig).
 /// Returns the view index of each keyframe, from 0 up.

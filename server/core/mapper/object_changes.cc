@@ -1,0 +1,287 @@
+#include "mapper/object_changes.h"
+
+#include <algorithm>
+#include <array>
+#include <limits>
+#include <tuple>
+
+#include "types/coco_classes.h"
+
+namespace objmap {
+namespace {
+
+constexpr KeyframeId kMaxKeyframeId = std::numeric_limits<KeyframeId>::max();
+
+// What the keyframes said of one object's place.
+struct PlaceEvidence {
+  const MapObject* object = nullptr;
+  KeyframeId first_seen = 0, last_seen = 0;
+  KeyframeId seen_empty_at = 0;    // see ObjectPlace
+  bool seen_empty_before = false;  // min_empty_views saw the place empty before first_seen
+  bool judged_before = false;      // some keyframe before first_seen could judge the place
+  bool counts = false;             // confirmed (as of its last sighting, when gone)
+};
+
+// A view clearly saw the object there: its place in view, and at most half the share of
+// see-through points that would call it empty.
+bool SawItThere(const ObjectVisibility& seen, const ChangeConfig& config) {
+  return CouldJudgePlace(seen, config) && seen.empty_fraction < 0.5f * config.min_empty_fraction;
+}
+
+// Scans the keyframes of `visibility` in [from, to) that did not observe the object: counts the
+// independent views that saw its place empty since the last one that saw it there. Returns the
+// keyframe at which that count reached min_empty_views (0: never), and whether any keyframe
+// could judge the place.
+KeyframeId EmptyViewsBetween(const std::map<KeyframeId, ObjectVisibility>& visibility,
+                             const std::set<KeyframeId>& observed, KeyframeId from, KeyframeId to,
+                             const std::map<KeyframeId, int>& view_of_keyframe,
+                             const ChangeConfig& config, bool* judged) {
+  std::set<int> empty_views;
+  KeyframeId reached_at = 0;
+  for (auto it = visibility.lower_bound(from); it != visibility.end() && it->first < to; ++it) {
+    if (observed.count(it->first) > 0) continue;
+    const ObjectVisibility& seen = it->second;
+    if (CouldJudgePlace(seen, config) && judged != nullptr) *judged = true;
+    if (SawItThere(seen, config)) {
+      empty_views.clear();
+      reached_at = 0;
+      continue;
+    }
+    if (!SawPlaceEmpty(seen, config)) continue;
+    const auto view = view_of_keyframe.find(it->first);
+    empty_views.insert(view != view_of_keyframe.end() ? view->second
+                                                      : -static_cast<int>(it->first));
+    if (reached_at == 0 && static_cast<int>(empty_views.size()) >= config.min_empty_views) {
+      reached_at = it->first;
+    }
+  }
+  return reached_at;
+}
+
+// Sizes along the bounding box's axes, largest first.
+std::array<float, 3> SortedExtents(const MapObject& object) {
+  const Eigen::Vector3f size = object.max_W - object.min_W;
+  std::array<float, 3> extents = {size.x(), size.y(), size.z()};
+  std::sort(extents.begin(), extents.end(), std::greater<float>());
+  return extents;
+}
+
+// The larger ratio between corresponding extents of the two largest (at least 1); a few
+// centimetres of either extent are within the noise of a model seen from a few sides. The
+// smallest extent is left out: it is the depth a view sees least of (a chair seen from the front
+// is a thin slab until a view from the side fills it in).
+float SizeRatio(const MapObject& a, const MapObject& b) {
+  const std::array<float, 3> ea = SortedExtents(a), eb = SortedExtents(b);
+  float worst = 1.f;
+  for (int i = 0; i < 2; ++i) {
+    const float small = std::max(std::min(ea[i], eb[i]), 0.03f);
+    const float large = std::max(std::max(ea[i], eb[i]), 0.03f);
+    worst = std::max(worst, large / small);
+  }
+  return worst;
+}
+
+// The mean colour of the model's voxels (0..255 per channel).
+Eigen::Vector3f MeanColour(const MapObject& object) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  std::size_t count = 0;
+  object.model_W.ForEachVoxel([&](const Eigen::Vector3f&, std::uint32_t, auto colour) {
+    const std::array<std::uint8_t, 3> rgb = colour();
+    sum += Eigen::Vector3d(rgb[0], rgb[1], rgb[2]);
+    ++count;
+    return true;
+  });
+  if (count == 0) return Eigen::Vector3f::Zero();
+  return (sum / static_cast<double>(count)).cast<float>();
+}
+
+ObjectPlace PlaceOf(const PlaceEvidence& evidence) {
+  ObjectPlace place;
+  place.object = evidence.object->id;
+  place.centroid_W = evidence.object->centroid_W;
+  place.min_W = evidence.object->min_W;
+  place.max_W = evidence.object->max_W;
+  place.first_seen = evidence.first_seen;
+  place.last_seen = evidence.last_seen;
+  place.seen_empty_at = evidence.seen_empty_at;
+  return place;
+}
+
+}  // namespace
+
+ObjectId ObjectChanges::PublishedId(ObjectId object) const {
+  const auto it = published_id.find(object);
+  return it != published_id.end() ? it->second : object;
+}
+
+const char* ChangeKindName(ObjectChange::Kind kind) {
+  switch (kind) {
+    case ObjectChange::Kind::kAdded:
+      return "added";
+    case ObjectChange::Kind::kRemoved:
+      return "removed";
+    case ObjectChange::Kind::kMoved:
+      return "moved";
+  }
+  return "?";
+}
+
+const char* ObjectStateName(ObjectState state) {
+  switch (state) {
+    case ObjectState::kPresent:
+      return "present";
+    case ObjectState::kRemoved:
+      return "removed";
+    case ObjectState::kMoved:
+      return "moved";
+  }
+  return "?";
+}
+
+std::vector<ObjectChange> ChangeList(const ObjectChanges& changes) {
+  std::vector<ObjectChange> list;
+  for (const auto& [id, history] : changes.histories) {
+    if (history.places.empty()) continue;
+    auto change_at = [&](ObjectChange::Kind kind, KeyframeId keyframe, const ObjectPlace& place) {
+      ObjectChange& change = list.emplace_back();
+      change.kind = kind;
+      change.id = id;
+      change.class_id = history.class_id;
+      change.keyframe_id = keyframe;
+      change.centroid_W = place.centroid_W;
+      change.min_W = place.min_W;
+      change.max_W = place.max_W;
+      return &change;
+    };
+    if (history.added_at != 0) {
+      change_at(ObjectChange::Kind::kAdded, history.added_at, history.places.front());
+    }
+    for (std::size_t i = 1; i < history.places.size(); ++i) {
+      const ObjectPlace& from = history.places[i - 1];
+      const ObjectPlace& to = history.places[i];
+      // Known once both are: the old place seen empty and the object seen at the new one.
+      ObjectChange* moved =
+          change_at(ObjectChange::Kind::kMoved, std::max(from.seen_empty_at, to.first_seen), to);
+      moved->from_W = from.centroid_W;
+    }
+    if (history.state == ObjectState::kRemoved) {
+      const ObjectPlace& last = history.places.back();
+      change_at(ObjectChange::Kind::kRemoved, last.seen_empty_at, last);
+    }
+  }
+  std::stable_sort(list.begin(), list.end(), [](const ObjectChange& a, const ObjectChange& b) {
+    return std::tie(a.keyframe_id, a.id) < std::tie(b.keyframe_id, b.id);
+  });
+  return list;
+}
+
+ObjectChanges DetectChanges(const ChangeInputs& inputs, const ChangeConfig& config) {
+  ObjectChanges changes;
+  if (!config.enabled || inputs.objects == nullptr || inputs.view_of_keyframe == nullptr) {
+    return changes;
+  }
+  std::map<ObjectId, PlaceEvidence> places;
+  for (const auto& [id, object] : inputs.objects->objects()) {
+    if (object.Label() == kUnknownClassId || object.observations.empty()) continue;
+    std::set<KeyframeId> observed;
+    for (const ObjectObservation& observation : object.observations) {
+      observed.insert(observation.keyframe_id);
+    }
+    PlaceEvidence evidence;
+    evidence.object = &object;
+    evidence.first_seen = *observed.begin();
+    evidence.last_seen = *observed.rbegin();
+    const std::map<KeyframeId, ObjectVisibility>& visibility = inputs.visibility_of(object);
+    evidence.seen_empty_at =
+        EmptyViewsBetween(visibility, observed, evidence.last_seen + 1, kMaxKeyframeId,
+                          *inputs.view_of_keyframe, config, nullptr);
+    evidence.seen_empty_before =
+        EmptyViewsBetween(visibility, observed, 0, evidence.first_seen, *inputs.view_of_keyframe,
+                          config, &evidence.judged_before) != 0;
+    if (evidence.seen_empty_at != 0) changes.gone.insert(id);
+    evidence.counts = inputs.confirmed_through(
+        object, evidence.seen_empty_at != 0 ? evidence.last_seen : kMaxKeyframeId);
+    places.emplace(id, evidence);
+  }
+
+  // Moves: each removed object, in the order they went, takes the best later arrival of its
+  // label, shape and colour. Arrivals whose place was seen empty first are surest; then those
+  // whose place nothing saw before (a place the map had not looked at); last those seen standing
+  // there before their first detection (flat things a view cannot see through: a book put on the
+  // floor looks like the floor to the depth; or an object there all along that the detector
+  // missed until then, which only a removed object of its label, shape and colour can claim).
+  std::map<ObjectId, ObjectId> next, previous;
+  std::map<ObjectId, Eigen::Vector3f> colours;  // mean model colours, worked out when compared
+  auto colour_of = [&colours](const MapObject& object) {
+    auto it = colours.find(object.id);
+    if (it == colours.end()) it = colours.emplace(object.id, MeanColour(object)).first;
+    return it->second;
+  };
+  std::vector<const PlaceEvidence*> removed;
+  for (const auto& [id, evidence] : places) {
+    if (evidence.counts && evidence.seen_empty_at != 0) removed.push_back(&evidence);
+  }
+  std::sort(removed.begin(), removed.end(), [](const PlaceEvidence* a, const PlaceEvidence* b) {
+    return std::tie(a->seen_empty_at, a->object->id) < std::tie(b->seen_empty_at, b->object->id);
+  });
+  for (const PlaceEvidence* gone : removed) {
+    const int label = gone->object->Label();
+    const PlaceEvidence* best = nullptr;
+    std::tuple<int, float, KeyframeId> best_key;
+    for (const auto& [id, arrival] : places) {
+      if (!arrival.counts || previous.count(id) > 0 || id == gone->object->id) continue;
+      if (arrival.first_seen <= gone->last_seen || arrival.object->Label() != label) continue;
+      const float ratio = SizeRatio(*gone->object, *arrival.object);
+      if (ratio > config.max_move_size_ratio) continue;
+      if ((arrival.object->centroid_W - gone->object->centroid_W).norm() <
+          config.min_move_distance_m) {
+        continue;
+      }
+      if (config.max_move_colour_distance > 0.f &&
+          (colour_of(*arrival.object) - colour_of(*gone->object)).norm() >
+              config.max_move_colour_distance) {
+        continue;
+      }
+      const int surety = arrival.seen_empty_before ? 0 : arrival.judged_before ? 2 : 1;
+      const std::tuple<int, float, KeyframeId> key{surety, ratio, arrival.first_seen};
+      if (best == nullptr || key < best_key) {
+        best = &arrival;
+        best_key = key;
+      }
+    }
+    if (best == nullptr) continue;
+    next[gone->object->id] = best->object->id;
+    previous[best->object->id] = gone->object->id;
+  }
+
+  for (const auto& [id, head] : places) {
+    if (!head.counts || previous.count(id) > 0) continue;
+    ObjectHistory history;
+    history.class_id = head.object->Label();
+    history.id = id;
+    for (ObjectId at = id;;) {
+      const PlaceEvidence& place = places.at(at);
+      history.places.push_back(PlaceOf(place));
+      history.id = std::min(history.id, at);
+      const auto successor = next.find(at);
+      if (successor == next.end()) break;
+      at = successor->second;
+    }
+    const ObjectPlace& last = history.places.back();
+    history.state = last.seen_empty_at != 0     ? ObjectState::kRemoved
+                    : history.places.size() > 1 ? ObjectState::kMoved
+                                                : ObjectState::kPresent;
+    if (head.seen_empty_before) history.added_at = head.first_seen;
+    if (history.added_at == 0 && history.places.size() == 1 &&
+        history.state == ObjectState::kPresent) {
+      continue;  // no change
+    }
+    for (const ObjectPlace& place : history.places) {
+      if (place.object != history.id) changes.published_id[place.object] = history.id;
+    }
+    changes.histories.emplace(history.id, std::move(history));
+  }
+  return changes;
+}
+
+}  // namespace objmap

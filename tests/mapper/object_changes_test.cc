@@ -1,0 +1,238 @@
+// Changes over two visits of a table: a cup taken away, moved or put down between them, and
+// what the mapper makes of each (Mapper::Changes, ConfirmedObjects, Inventory, objects.json).
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "mapper/map_export.h"
+#include "mapper/mapper.h"
+#include "test_scenes.h"
+#include "types/coco_classes.h"
+
+namespace objmap {
+namespace {
+
+using testing::SceneBox;
+
+const int kCup = CocoClassId("cup");
+
+const SceneBox kTable{{-0.6, -0.8, 0.60}, {0.6, 0.8, 0.70}, {150, 100, 60}};
+const SceneBox kWall{{1.5, -2.0, 0.0}, {1.6, 2.0, 2.5}, {220, 220, 220}};
+const SceneBox kCupOne{{-0.05, -0.25, 0.70}, {0.05, -0.15, 0.82}, {200, 30, 30}};
+const SceneBox kCupTwo{{-0.05, 0.15, 0.70}, {0.05, 0.25, 0.82}, {30, 30, 200}};
+// Where cup two stands after it was moved, and where a third cup is put down: both on the table,
+// in view of both visits, 30 cm and more from anything else.
+const SceneBox kCupTwoMoved{{0.20, 0.45, 0.70}, {0.30, 0.55, 0.82}, {30, 30, 200}};
+const SceneBox kCupThree{{-0.35, 0.45, 0.70}, {-0.25, 0.55, 0.82}, {30, 160, 30}};
+
+// A visit: camera positions looking at the table, each an independent view of the others.
+struct Visit {
+  std::vector<Eigen::Vector3d> eyes;
+};
+const Visit kFirstVisit{{{-1.0, 0.0, 1.3}, {-1.0, 0.25, 1.3}, {-0.95, -0.25, 1.35}}};
+const Visit kSecondVisit{{{-1.05, -0.35, 1.25}, {-0.9, 0.35, 1.3}, {-1.1, 0.1, 1.4}}};
+
+class ObjectChangesTest : public ::testing::Test {
+ protected:
+  // Maps every eye of `visit` over `scene` (table, wall, and the cups in `cups`); the cups in
+  // `detected` (a subset of `cups`) are detected in every view.
+  void MapVisit(Mapper* mapper, const Visit& visit, const std::vector<SceneBox>& cups,
+                const std::vector<SceneBox>& detected) const {
+    std::vector<SceneBox> boxes = {kTable, kWall};
+    boxes.insert(boxes.end(), cups.begin(), cups.end());
+    for (const Eigen::Vector3d& eye : visit.eyes) {
+      const Eigen::Isometry3d T_W_C = testing::LookAt(eye, Eigen::Vector3d(0, 0.1, 0.7));
+      std::vector<Detection> detections;
+      for (const SceneBox& cup : detected) {
+        detections.push_back({testing::ProjectBox(cup, T_W_C, K_), kCup, 0.6f});
+      }
+      KeyframeResult result;
+      std::string why;
+      ASSERT_TRUE(mapper->AddKeyframe(testing::RenderFrame(boxes, K_, T_W_C, "frame"), detections,
+                                      &result, &why))
+          << why;
+    }
+  }
+
+  // The object of the mapper nearest `box`'s centre.
+  static ObjectId ObjectAt(const Mapper& mapper, const SceneBox& box) {
+    const Eigen::Vector3f centre = ((box.lo + box.hi) * 0.5).cast<float>();
+    ObjectId best = 0;
+    float best_distance = 1e9f;
+    for (const auto& [id, object] : mapper.objects().objects()) {
+      const float distance = (object.centroid_W - centre).norm();
+      if (distance < best_distance) {
+        best = id;
+        best_distance = distance;
+      }
+    }
+    return best_distance < 0.05f ? best : 0;
+  }
+
+  static bool IsConfirmed(const Mapper& mapper, ObjectId id) {
+    for (const MapObject* object : mapper.ConfirmedObjects()) {
+      if (object->id == id) return true;
+    }
+    return false;
+  }
+
+  CameraIntrinsics K_;
+  const MapperConfig config_;
+};
+
+TEST_F(ObjectChangesTest, OneVisitHasNoChanges) {
+  Mapper mapper{config_};
+  MapVisit(&mapper, kFirstVisit, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});
+  MapVisit(&mapper, kSecondVisit, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});
+  const ObjectChanges changes = mapper.Changes();
+  EXPECT_TRUE(changes.histories.empty());
+  EXPECT_TRUE(changes.gone.empty());
+  EXPECT_EQ(mapper.ConfirmedObjects().size(), 2u);
+}
+
+TEST_F(ObjectChangesTest, ACupTakenAwayIsRemovedAndLeavesTheInventory) {
+  Mapper mapper{config_};
+  MapVisit(&mapper, kFirstVisit, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});
+  const ObjectId cup_two = ObjectAt(mapper, kCupTwo);
+  ASSERT_NE(cup_two, 0);
+  ASSERT_TRUE(IsConfirmed(mapper, cup_two));
+  MapVisit(&mapper, kSecondVisit, {kCupOne}, {kCupOne});
+
+  const ObjectChanges changes = mapper.Changes();
+  ASSERT_EQ(changes.histories.count(cup_two), 1u);
+  const ObjectHistory& history = changes.histories.at(cup_two);
+  EXPECT_EQ(history.state, ObjectState::kRemoved);
+  EXPECT_EQ(history.class_id, kCup);
+  ASSERT_EQ(history.places.size(), 1u);
+  // Two independent views of the second visit are the evidence: the fifth keyframe completes it.
+  EXPECT_EQ(history.places[0].seen_empty_at, 5);
+  EXPECT_EQ(changes.gone.count(cup_two), 1u);
+  EXPECT_FALSE(IsConfirmed(mapper, cup_two));
+  ASSERT_EQ(mapper.Inventory().size(), 1u);
+  EXPECT_EQ(mapper.Inventory()[0].count, 1);
+
+  const std::vector<ObjectChange> list = ChangeList(changes);
+  ASSERT_EQ(list.size(), 1u);
+  EXPECT_EQ(list[0].kind, ObjectChange::Kind::kRemoved);
+  EXPECT_EQ(list[0].id, cup_two);
+  EXPECT_NEAR(list[0].centroid_W.y(), 0.2f, 0.03f);
+
+  // objects.json lists it as removed, not among the objects.
+  const nlohmann::json json = nlohmann::json::parse(ObjectsJson(mapper));
+  ASSERT_EQ(json["removed"].size(), 1u);
+  EXPECT_EQ(json["removed"][0]["id"], cup_two);
+  for (const nlohmann::json& object : json["objects"]) EXPECT_NE(object["id"], cup_two);
+}
+
+TEST_F(ObjectChangesTest, DetectorMissesAloneRemoveNothing) {
+  Mapper mapper{config_};
+  MapVisit(&mapper, kFirstVisit, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});
+  const ObjectId cup_two = ObjectAt(mapper, kCupTwo);
+  // Cup two is still there; the detector just does not find it in the second visit.
+  MapVisit(&mapper, kSecondVisit, {kCupOne, kCupTwo}, {kCupOne});
+  const ObjectChanges changes = mapper.Changes();
+  EXPECT_EQ(changes.histories.count(cup_two), 0u);
+  EXPECT_EQ(changes.gone.count(cup_two), 0u);
+  EXPECT_TRUE(ChangeList(changes).empty());
+}
+
+TEST_F(ObjectChangesTest, AMovedCupKeepsItsIdAndBothPlaces) {
+  Mapper mapper{config_};
+  MapVisit(&mapper, kFirstVisit, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});
+  const ObjectId cup_two = ObjectAt(mapper, kCupTwo);
+  MapVisit(&mapper, kSecondVisit, {kCupOne, kCupTwoMoved}, {kCupOne, kCupTwoMoved});
+  const ObjectId new_place = ObjectAt(mapper, kCupTwoMoved);
+  ASSERT_NE(new_place, 0);
+  ASSERT_NE(new_place, cup_two);  // the map keeps one object per place ...
+
+  const ObjectChanges changes = mapper.Changes();
+  EXPECT_EQ(changes.PublishedId(new_place), cup_two);  // ... published under one id
+  ASSERT_EQ(changes.histories.count(cup_two), 1u);
+  const ObjectHistory& history = changes.histories.at(cup_two);
+  EXPECT_EQ(history.state, ObjectState::kMoved);
+  ASSERT_EQ(history.places.size(), 2u);
+  EXPECT_EQ(history.places[0].object, cup_two);
+  EXPECT_EQ(history.places[1].object, new_place);
+  EXPECT_EQ(history.added_at, 0);
+
+  const std::vector<ObjectChange> list = ChangeList(changes);
+  ASSERT_EQ(list.size(), 1u);
+  EXPECT_EQ(list[0].kind, ObjectChange::Kind::kMoved);
+  EXPECT_EQ(list[0].id, cup_two);
+  EXPECT_NEAR(list[0].from_W.y(), 0.2f, 0.03f);
+  EXPECT_NEAR(list[0].centroid_W.y(), 0.5f, 0.03f);
+
+  // Two cups in the inventory, under the ids a client knew.
+  const std::vector<InventoryEntry> inventory = mapper.Inventory();
+  ASSERT_EQ(inventory.size(), 1u);
+  ASSERT_EQ(inventory[0].count, 2);
+  std::vector<ObjectId> ids = inventory[0].objects;
+  std::sort(ids.begin(), ids.end());
+  EXPECT_EQ(ids, (std::vector<ObjectId>{ObjectAt(mapper, kCupOne), cup_two}));
+  const nlohmann::json json = nlohmann::json::parse(ObjectsJson(mapper));
+  bool found = false;
+  for (const nlohmann::json& object : json["objects"]) {
+    if (object["id"] != cup_two) continue;
+    found = true;
+    EXPECT_EQ(object["state"], "moved");
+    ASSERT_EQ(object["previous_places"].size(), 1u);
+    EXPECT_NEAR(object["centroid"][1].get<double>(), 0.5, 0.03);
+  }
+  EXPECT_TRUE(found);
+}
+
+TEST_F(ObjectChangesTest, ACupPutWhereTheTableWasSeenEmptyIsAdded) {
+  Mapper mapper{config_};
+  MapVisit(&mapper, kFirstVisit, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});
+  MapVisit(&mapper, kSecondVisit, {kCupOne, kCupTwo, kCupThree}, {kCupOne, kCupTwo, kCupThree});
+  const ObjectId cup_three = ObjectAt(mapper, kCupThree);
+  ASSERT_NE(cup_three, 0);
+  const ObjectChanges changes = mapper.Changes();
+  ASSERT_EQ(changes.histories.size(), 1u);
+  ASSERT_EQ(changes.histories.count(cup_three), 1u);
+  EXPECT_EQ(changes.histories.at(cup_three).state, ObjectState::kPresent);
+  EXPECT_EQ(changes.histories.at(cup_three).added_at, 4);
+  const std::vector<ObjectChange> list = ChangeList(changes);
+  ASSERT_EQ(list.size(), 1u);
+  EXPECT_EQ(list[0].kind, ObjectChange::Kind::kAdded);
+  EXPECT_TRUE(IsConfirmed(mapper, cup_three));
+}
+
+TEST_F(ObjectChangesTest, ARestartFindsTheSameChanges) {
+  Mapper live{config_};
+  MapVisit(&live, kFirstVisit, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});
+  MapVisit(&live, kSecondVisit, {kCupTwoMoved, kCupThree}, {kCupTwoMoved, kCupThree});
+  std::map<KeyframeId, KeyframeRecord> records;
+  for (KeyframeId id = 1; id <= 6; ++id) records[id] = *live.FindKeyframe(id);
+  std::map<ObjectId, std::vector<ObjectObservation>> observations;
+  for (const auto& [id, object] : live.objects().objects()) observations[id] = object.observations;
+  Mapper restarted{config_};
+  restarted.Restore(records, observations, live.objects().next_id());
+
+  const std::vector<ObjectChange> before = ChangeList(live.Changes());
+  const std::vector<ObjectChange> after = ChangeList(restarted.Changes());
+  // Cup one removed, cup two moved, cup three added (green: not the red cup one, moved).
+  ASSERT_EQ(before.size(), 3u);
+  ASSERT_EQ(after.size(), before.size());
+  for (std::size_t i = 0; i < before.size(); ++i) {
+    EXPECT_EQ(after[i].kind, before[i].kind);
+    EXPECT_EQ(after[i].id, before[i].id);
+    EXPECT_EQ(after[i].keyframe_id, before[i].keyframe_id);
+  }
+}
+
+TEST_F(ObjectChangesTest, ChangesCanBeSwitchedOff) {
+  MapperConfig config;
+  config.changes.enabled = false;
+  Mapper mapper{config};
+  MapVisit(&mapper, kFirstVisit, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});
+  MapVisit(&mapper, kSecondVisit, {kCupOne}, {kCupOne});
+  EXPECT_TRUE(mapper.Changes().histories.empty());
+  std::string why;
+  config.changes.min_empty_views = 0;
+  EXPECT_FALSE(config.IsValid(&why));
+  EXPECT_NE(why.find("min_empty_views"), std::string::npos) << why;
+}
+
+}  // namespace
+}  // namespace objmap
