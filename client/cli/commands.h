@@ -45,6 +45,8 @@ int RunUpdatePosesCommand(int argc, char** argv);
 int RunKeyframesCommand(int argc, char** argv);
 /// `objmap sessions`: the map's sessions; `--start NAME` opens a new one.
 int RunSessionsCommand(int argc, char** argv);
+/// `objmap changes`: objects added, removed and moved, since a version, a session or a time.
+int RunChangesCommand(int argc, char** argv);
 /// `objmap status`: map version, counts, queue, regeneration, database.
 int RunStatusCommand(int argc, char** argv);
 

@@ -33,6 +33,7 @@ void PrintUsage(std::ostream& out) {
          "  objmap update-poses <poses.txt> [--wait]     corrected keyframe poses\n"
          "  objmap keyframes [--out poses.txt]           keyframe poses (update-poses format)\n"
          "  objmap sessions [--start NAME] [--json]      the map's sessions; start a new one\n"
+         "  objmap changes [--since-session S] [--json]  objects added, removed and moved\n"
          "  objmap status                                map version, counts, queue\n"
 #endif
          "  objmap --version                             version and the build's options\n"
@@ -55,6 +56,7 @@ const std::map<std::string, Command>& Commands() {
       {"export", objmap::cli::RunExportCommand},
       {"keyframes", objmap::cli::RunKeyframesCommand},
       {"sessions", objmap::cli::RunSessionsCommand},
+      {"changes", objmap::cli::RunChangesCommand},
       {"update-poses", objmap::cli::RunUpdatePosesCommand},
       {"status", objmap::cli::RunStatusCommand},
 #endif

@@ -156,6 +156,11 @@ grpc::Status MapClient::GetObject(const v1::GetObjectRequest& request, v1::Objec
   return Call(&Stub::GetObject, request, response);
 }
 
+grpc::Status MapClient::ListChanges(const v1::ListChangesRequest& request,
+                                    v1::ListChangesResponse* response) {
+  return Call(&Stub::ListChanges, request, response);
+}
+
 grpc::Status MapClient::Inventory(const v1::InventoryRequest& request,
                                   v1::InventoryResponse* response) {
   return Call(&Stub::Inventory, request, response);

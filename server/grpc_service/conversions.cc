@@ -165,6 +165,57 @@ bool DetectionFromProto(const v1::Detection& proto, const std::string& field, De
   return true;
 }
 
+namespace {
+
+void SeenToProto(const ObjectSeen& seen, v1::Seen* proto) {
+  proto->set_keyframe_id(seen.keyframe_id);
+  proto->set_session_id(seen.session_id);
+  proto->set_stamp(seen.stamp_s);
+}
+
+v1::ObjectState ObjectStateToProto(ObjectState state) {
+  switch (state) {
+    case ObjectState::kRemoved:
+      return v1::REMOVED;
+    case ObjectState::kMoved:
+      return v1::MOVED;
+    case ObjectState::kPresent:
+      break;
+  }
+  return v1::PRESENT;
+}
+
+v1::ObjectChange::Kind ChangeKindToProto(ObjectChange::Kind kind) {
+  switch (kind) {
+    case ObjectChange::Kind::kRemoved:
+      return v1::ObjectChange::REMOVED;
+    case ObjectChange::Kind::kMoved:
+      return v1::ObjectChange::MOVED;
+    case ObjectChange::Kind::kAdded:
+      break;
+  }
+  return v1::ObjectChange::ADDED;
+}
+
+}  // namespace
+
+void ObjectChangeToProto(const MapObjectChange& entry, v1::ObjectChange* proto) {
+  const ObjectChange& change = entry.change;
+  proto->set_kind(ChangeKindToProto(change.kind));
+  proto->set_object_id(change.id);
+  proto->set_class_id(change.class_id);
+  proto->set_class_name(std::string(ObjectClassName(change.class_id)));
+  SeenToProto(entry.seen, proto->mutable_seen());
+  proto->set_map_version(entry.version);
+  *proto->mutable_position() = Vec3ToProto(change.centroid_W);
+  *proto->mutable_bounds()->mutable_min() = Vec3ToProto(change.min_W);
+  *proto->mutable_bounds()->mutable_max() = Vec3ToProto(change.max_W);
+  if (change.kind == ObjectChange::Kind::kMoved) {
+    *proto->mutable_from() = Vec3ToProto(change.from_W);
+    SeenToProto(entry.from_last_seen, proto->mutable_from_last_seen());
+  }
+}
+
 void ObjectToProto(const ObjectView& view, bool include_model, v1::Object* object) {
   object->set_id(view.id);
   object->set_class_id(view.class_id);
@@ -184,17 +235,25 @@ void ObjectToProto(const ObjectView& view, bool include_model, v1::Object* objec
   object->set_confirmed(view.confirmed);
   object->set_changed_version(view.changed_version);
   if (view.first_seen.keyframe_id != 0) {
-    auto seen_to_proto = [](const ObjectSeen& seen, v1::Seen* proto) {
-      proto->set_keyframe_id(seen.keyframe_id);
-      proto->set_session_id(seen.session_id);
-      proto->set_stamp(seen.stamp_s);
-    };
-    seen_to_proto(view.first_seen, object->mutable_first_seen());
-    seen_to_proto(view.last_seen, object->mutable_last_seen());
+    SeenToProto(view.first_seen, object->mutable_first_seen());
+    SeenToProto(view.last_seen, object->mutable_last_seen());
     if (view.last_seen_absent.keyframe_id != 0) {
-      seen_to_proto(view.last_seen_absent, object->mutable_last_seen_absent());
+      SeenToProto(view.last_seen_absent, object->mutable_last_seen_absent());
     }
   }
+  object->set_state(ObjectStateToProto(view.state));
+  for (const ObjectPlaceView& place : view.previous_places) {
+    v1::Place* proto = object->add_previous_places();
+    *proto->mutable_centroid() = Vec3ToProto(place.centroid_W);
+    *proto->mutable_bounds()->mutable_min() = Vec3ToProto(place.min_W);
+    *proto->mutable_bounds()->mutable_max() = Vec3ToProto(place.max_W);
+    SeenToProto(place.first_seen, proto->mutable_first_seen());
+    SeenToProto(place.last_seen, proto->mutable_last_seen());
+    if (place.seen_empty.keyframe_id != 0)
+      SeenToProto(place.seen_empty, proto->mutable_seen_empty());
+  }
+  if (view.added.keyframe_id != 0) SeenToProto(view.added, object->mutable_added());
+  if (view.removed.keyframe_id != 0) SeenToProto(view.removed, object->mutable_removed());
   if (include_model && view.model_W) ModelToProto(*view.model_W, object);
 }
 
@@ -231,6 +290,9 @@ void MapChangeToProto(const MapChange& change, v1::MapChange* proto) {
   proto->mutable_added_objects()->Add(change.added.begin(), change.added.end());
   proto->mutable_updated_objects()->Add(change.updated.begin(), change.updated.end());
   proto->mutable_removed_objects()->Add(change.removed.begin(), change.removed.end());
+  for (const MapObjectChange& object_change : change.object_changes) {
+    ObjectChangeToProto(object_change, proto->add_object_changes());
+  }
 }
 
 v1::VoxelState VoxelStateToProto(VoxelState state) {

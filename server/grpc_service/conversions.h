@@ -57,6 +57,7 @@ void ObjectToProto(const ObjectView& view, bool include_model, v1::Object* objec
 void InventoryEntryToProto(const InventoryEntry& entry, v1::InventoryEntry* proto);
 
 void MapChangeToProto(const MapChange& change, v1::MapChange* proto);
+void ObjectChangeToProto(const MapObjectChange& change, v1::ObjectChange* proto);
 void SessionToProto(const SessionSummary& summary, bool current, v1::Session* proto);
 
 [[nodiscard]] v1::VoxelState VoxelStateToProto(VoxelState state);

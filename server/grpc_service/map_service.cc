@@ -47,10 +47,10 @@ grpc::Status DecodeRequest(const grpc::ByteBuffer& bytes, Message* message) {
   const google::protobuf::Descriptor& type = *Message::descriptor();
   std::string text_fields;
   AppendStringFields(type, "", 0, &text_fields);
-  return Invalid("cannot decode the " + type.name() + " (" + std::to_string(bytes.Length()) +
-                 " bytes): not a " + type.full_name() + " message" +
-                 (text_fields.empty() ? std::string()
-                                      : ", or a text field (" + text_fields + ") not UTF-8"));
+  return Invalid(
+      "cannot decode the " + type.name() + " (" + std::to_string(bytes.Length()) +
+      " bytes): not a " + type.full_name() + " message" +
+      (text_fields.empty() ? std::string() : ", or a text field (" + text_fields + ") not UTF-8"));
 }
 
 void OutcomeToProto(const AddKeyframeOutcome& outcome, v1::AddKeyframeResponse* response) {
@@ -170,6 +170,7 @@ void MapServiceImpl::RegisterMethods() {
   AddUnary("ListSessions", false, &MapServiceImpl::ListSessions);
   AddUnary("QueryObjects", false, &MapServiceImpl::QueryObjects);
   AddUnary("GetObject", false, &MapServiceImpl::GetObject);
+  AddUnary("ListChanges", false, &MapServiceImpl::ListChanges);
   AddUnary("Inventory", false, &MapServiceImpl::Inventory);
   AddUnary("QueryOccupancy", false, &MapServiceImpl::QueryOccupancy);
   AddUnary("IsFree", false, &MapServiceImpl::IsFree);
@@ -190,10 +191,9 @@ void MapServiceImpl::RegisterMethods() {
           },
           this)));
   if (static_cast<int>(method_paths_.size()) != MapServiceDescriptor().method_count()) {
-    throw std::logic_error("objmap.proto's MapService has " +
-                           std::to_string(MapServiceDescriptor().method_count()) +
-                           " methods but the service registers " +
-                           std::to_string(method_paths_.size()));
+    throw std::logic_error(
+        "objmap.proto's MapService has " + std::to_string(MapServiceDescriptor().method_count()) +
+        " methods but the service registers " + std::to_string(method_paths_.size()));
   }
 }
 

@@ -46,8 +46,7 @@ class MapServiceImpl final : public grpc::Service {
                                v1::IngestSummary* summary);
   grpc::Status UpdatePoses(grpc::ServerContext* context, const v1::UpdatePosesRequest* request,
                            v1::UpdatePosesResponse* response);
-  grpc::Status ListKeyframes(grpc::ServerContext* context,
-                             const v1::ListKeyframesRequest* request,
+  grpc::Status ListKeyframes(grpc::ServerContext* context, const v1::ListKeyframesRequest* request,
                              v1::ListKeyframesResponse* response);
   grpc::Status StartSession(grpc::ServerContext* context, const v1::StartSessionRequest* request,
                             v1::Session* response);
@@ -58,6 +57,8 @@ class MapServiceImpl final : public grpc::Service {
                             v1::QueryObjectsResponse* response);
   grpc::Status GetObject(grpc::ServerContext* context, const v1::GetObjectRequest* request,
                          v1::Object* response);
+  grpc::Status ListChanges(grpc::ServerContext* context, const v1::ListChangesRequest* request,
+                           v1::ListChangesResponse* response);
   grpc::Status Inventory(grpc::ServerContext* context, const v1::InventoryRequest* request,
                          v1::InventoryResponse* response);
 

@@ -58,9 +58,9 @@ grpc::Status MapServiceImpl::ListKeyframes(grpc::ServerContext* /*context*/,
     }
     std::vector<KeyframeSummary> keyframes;
     std::uint64_t version = 0;
-    const grpc::Status status = ToGrpcStatus(server_.ListKeyframes(
-        request->first_id(), static_cast<std::size_t>(request->max_results()), &keyframes,
-        &version));
+    const grpc::Status status = ToGrpcStatus(
+        server_.ListKeyframes(request->first_id(), static_cast<std::size_t>(request->max_results()),
+                              &keyframes, &version));
     if (!status.ok()) return status;
     response->set_map_version(version);
     for (const KeyframeSummary& keyframe : keyframes) {
@@ -131,6 +131,26 @@ grpc::Status MapServiceImpl::GetObject(grpc::ServerContext* /*context*/,
   });
 }
 
+grpc::Status MapServiceImpl::ListChanges(grpc::ServerContext* /*context*/,
+                                         const v1::ListChangesRequest* request,
+                                         v1::ListChangesResponse* response) {
+  return Guarded("ListChanges", [&] {
+    ChangeFilter filter;
+    if (request->has_since_version()) filter.since_version = request->since_version();
+    if (request->has_since_stamp()) filter.since_stamp_s = request->since_stamp();
+    if (request->has_since_session()) filter.since_session = request->since_session();
+    std::vector<MapObjectChange> changes;
+    std::uint64_t version = 0;
+    const grpc::Status status = ToGrpcStatus(server_.ListChanges(filter, &changes, &version));
+    if (!status.ok()) return status;
+    for (const MapObjectChange& change : changes) {
+      ObjectChangeToProto(change, response->add_changes());
+    }
+    response->set_map_version(version);
+    return status;
+  });
+}
+
 grpc::Status MapServiceImpl::Inventory(grpc::ServerContext* /*context*/,
                                        const v1::InventoryRequest* request,
                                        v1::InventoryResponse* response) {
@@ -193,9 +213,8 @@ grpc::Status MapServiceImpl::IsFree(grpc::ServerContext* /*context*/,
     RegionOccupancy counts;
     std::uint64_t version = 0;
     std::vector<ObjectId> objects;
-    const grpc::Status status =
-        ToGrpcStatus(server_.IsFree(box_W.first, box_W.second, request->unknown_is_free(), &free,
-                                    &counts, &objects, &version));
+    const grpc::Status status = ToGrpcStatus(server_.IsFree(
+        box_W.first, box_W.second, request->unknown_is_free(), &free, &counts, &objects, &version));
     if (!status.ok()) return status;
     response->set_free(free);
     response->set_occupied(counts.occupied);
@@ -215,9 +234,9 @@ grpc::Status MapServiceImpl::RayCast(grpc::ServerContext* /*context*/,
     RayHit hit;
     ObjectId object_hit = 0;
     std::uint64_t version = 0;
-    const grpc::Status status = ToGrpcStatus(server_.CastRay(
-        Vec3FromProto(request->origin()), Vec3FromProto(request->direction()), max_range_m,
-        request->unknown_stops(), &hit, &object_hit, &version));
+    const grpc::Status status = ToGrpcStatus(
+        server_.CastRay(Vec3FromProto(request->origin()), Vec3FromProto(request->direction()),
+                        max_range_m, request->unknown_stops(), &hit, &object_hit, &version));
     if (!status.ok()) return status;
     response->set_hit(hit.hit);
     if (hit.hit) {

@@ -87,6 +87,8 @@ class MapClient {
   grpc::Status QueryObjects(const v1::QueryObjectsRequest& request,
                             v1::QueryObjectsResponse* response);
   grpc::Status GetObject(const v1::GetObjectRequest& request, v1::Object* response);
+  grpc::Status ListChanges(const v1::ListChangesRequest& request,
+                           v1::ListChangesResponse* response);
   grpc::Status Inventory(const v1::InventoryRequest& request, v1::InventoryResponse* response);
   grpc::Status QueryOccupancy(const v1::QueryOccupancyRequest& request,
                               v1::QueryOccupancyResponse* response);

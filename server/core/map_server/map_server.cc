@@ -260,7 +260,11 @@ void MapServer::Impl::Run() {
         break;
       case MapJob::Kind::kWriteFolder: {
         std::string why;
-        result.status = WriteMapOutputs(*mapper, job->folder, &why)
+        const KeyframeWhenLookup when = [this](KeyframeId id) {
+          const ObjectSeen seen = snapshot_builder.Seen(id);
+          return KeyframeWhen{seen.session_id, seen.stamp_s};
+        };
+        result.status = WriteMapOutputs(*mapper, job->folder, &why, when)
                             ? ServiceStatus::Ok()
                             : ServiceStatus{StatusCode::kInternal, why};
         break;
@@ -375,19 +379,20 @@ MapJob::Result MapServer::Impl::ApplyKeyframe(MapJob* job) {
     std::lock_guard<std::mutex> lock(session_mutex);
     stored_sessions.insert(job->session.id);
     for (const StoredSession& stored_end : ends) {
-      ended_sessions.erase(std::remove_if(ended_sessions.begin(), ended_sessions.end(),
-                                          [&](const StoredSession& s) {
-                                            return s.id == stored_end.id;
-                                          }),
-                           ended_sessions.end());
+      ended_sessions.erase(
+          std::remove_if(ended_sessions.begin(), ended_sessions.end(),
+                         [&](const StoredSession& s) { return s.id == stored_end.id; }),
+          ended_sessions.end());
     }
   }
   out.keyframe.session_id = job->session.id;
   snapshot_builder.AddKeyframe(result.keyframe_id, job->session.id, job->frame.stamp_s);
   SnapshotBuilder::Diff diff;
   auto next = snapshot_builder.Build(*mapper, job->version, &diff);
-  MapChange map_change{job->version, MapChange::Kind::kKeyframeAdded, result.keyframe_id,
-                       diff.added, diff.updated, diff.removed};
+  MapChange map_change{job->version,       MapChange::Kind::kKeyframeAdded,
+                       result.keyframe_id, diff.added,
+                       diff.updated,       diff.removed,
+                       diff.object_changes};
   Publish(std::move(next), std::move(map_change));
 
   ++keyframes_since_checkpoint;
@@ -420,7 +425,7 @@ MapJob::Result MapServer::Impl::ApplyPoses(MapJob* job) {
   // object summaries follow the moved models.
   StoreChange change = report.reassociated ? AllObjectsChange(*mapper) : StoreChange{};
   if (!report.reassociated) {
-    for (ObjectId id : diff.updated) {
+    for (ObjectId id : diff.changed_objects) {
       if (const MapObject* object = mapper->objects().Find(id)) {
         change.object_summaries.push_back(Summarize(*object));
       }
@@ -444,7 +449,7 @@ MapJob::Result MapServer::Impl::ApplyPoses(MapJob* job) {
   last_regeneration_version = job->version;
   if (report.keyframes_moved > 0) checkpoint_due = true;
   Publish(std::move(next), MapChange{job->version, MapChange::Kind::kPosesUpdated, 0, diff.added,
-                                     diff.updated, diff.removed});
+                                     diff.updated, diff.removed, diff.object_changes});
   out.poses.map_version = job->version;
   out.poses.regenerated = true;
   out.poses.keyframes_moved = report.keyframes_moved;

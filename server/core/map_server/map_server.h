@@ -14,8 +14,8 @@
 #include "map_server/request_limits.h"
 #include "mapper/mapper.h"
 #include "objects/voxel_model.h"
-#include "odometry/rgbd_odometry.h"
 #include "occupancy/occupancy_map.h"
+#include "odometry/rgbd_odometry.h"
 #include "store/keyframe_store.h"
 #include "types/detection.h"
 #include "types/frame.h"
@@ -104,8 +104,8 @@ struct MapServerConfig {
 /// One detection that joined an object: where, in which keyframe's colour image, and as what.
 struct ObjectSighting {
   KeyframeId keyframe_id = 0;
-  BoundingBox2D box;    ///< colour pixels
-  int class_id = -1;    ///< the observation's best class (kUnknownClassId: no detection named it)
+  BoundingBox2D box;  ///< colour pixels
+  int class_id = -1;  ///< the observation's best class (kUnknownClassId: no detection named it)
   float score = 0.f;
 };
 
@@ -117,7 +117,18 @@ struct ObjectSeen {
   double stamp_s = 0.0;
 };
 
+/// A place an object stood before it moved, or where a removed object was.
+struct ObjectPlaceView {
+  Eigen::Vector3f centroid_W = Eigen::Vector3f::Zero();
+  Eigen::Vector3f min_W = Eigen::Vector3f::Zero();
+  Eigen::Vector3f max_W = Eigen::Vector3f::Zero();
+  ObjectSeen first_seen, last_seen;  ///< its first and last sighting there
+  /// The keyframe whose view completed the evidence that the place is empty (ChangeConfig).
+  ObjectSeen seen_empty;
+};
+
 struct ObjectView {
+  /// Its published id: a moved object keeps the id it had at its first place (Mapper::Changes).
   ObjectId id = 0;
   int class_id = -1;  ///< label
   float confidence = 0.f;
@@ -134,16 +145,48 @@ struct ObjectView {
   /// The newest keyframe that had it in view and did not see it (InventoryConfig::
   /// absent_min_visibility): seen absent, e.g. taken away since; keyframe_id 0: never.
   ObjectSeen last_seen_absent;
-  bool confirmed = false;                     ///< passes the inventory thresholds
-  std::uint64_t changed_version = 0;          ///< map version of the last change
+  bool confirmed = false;  ///< passes the inventory thresholds
+  /// kPresent, kMoved (with previous_places), or kRemoved for a tombstone
+  /// (MapSnapshot::tombstones: the object as it was last seen, at its last place).
+  ObjectState state = ObjectState::kPresent;
+  std::vector<ObjectPlaceView> previous_places;  ///< oldest first; empty unless it moved
+  /// Its first place had been seen empty before it was first seen there (it was put there
+  /// while the map watched): that first sighting; keyframe_id 0: not known to be added.
+  ObjectSeen added;
+  /// Tombstones: the keyframe whose view completed the evidence that it is gone.
+  ObjectSeen removed;
+  std::uint64_t changed_version = 0;             ///< map version of the last change
   std::shared_ptr<const ColoredPoints> model_W;  ///< the 5 mm model, world frame
+};
+
+/// One change of an object (added, removed, moved), with when the map learnt it.
+struct MapObjectChange {
+  ObjectChange change;
+  ObjectSeen seen;  ///< the keyframe that completed its evidence: its session and stamp
+  /// The map version at which it was first listed (after a restart: the first snapshot's).
+  std::uint64_t version = 0;
+  /// Moved: the previous place's sightings (first_seen .. last_seen there).
+  ObjectSeen from_last_seen;
+};
+
+/// Which changes a query wants; every set field must hold.
+struct ChangeFilter {
+  std::optional<std::uint64_t> since_version;  ///< listed after this map version
+  std::optional<double> since_stamp_s;         ///< its keyframe's camera stamp >= this
+  std::optional<SessionId> since_session;      ///< its keyframe's session >= this
 };
 
 /// The map as queries see it: replaced as a whole after every change, never modified.
 struct MapSnapshot {
   std::uint64_t version = 0;
   std::size_t num_keyframes = 0;
+  /// The present objects, by published id (removed ones are in tombstones, not here).
   std::map<ObjectId, std::shared_ptr<const ObjectView>> objects;
+  /// Removed objects, by id: out of the inventory, object queries, IsFree and CastRay; kept
+  /// for the change queries and GetObject.
+  std::map<ObjectId, std::shared_ptr<const ObjectView>> tombstones;
+  /// Every change of the map's objects, ordered by keyframe (ChangeList).
+  std::vector<MapObjectChange> changes;
   std::vector<InventoryEntry> inventory;  ///< confirmed objects per class, most frequent first
   /// Per COCO class, the last version at which an object of it was added, changed or removed
   /// (or changed label or inventory status); what Inventory(since) filters on.
@@ -204,6 +247,8 @@ struct MapChange {
   std::vector<ObjectId> added;
   std::vector<ObjectId> updated;
   std::vector<ObjectId> removed;
+  /// Object changes (added, removed, moved) first listed at this version.
+  std::vector<MapObjectChange> object_changes;
 };
 
 struct ServerStatus {
@@ -283,12 +328,12 @@ class MapServer {
                                           bool wait, PoseUpdateOutcome* outcome);
 
   /// Ends the current session and starts a new one (`name` empty: "session N"); every keyframe
-  /// added from now on joins it. A current session that has mapped nothing is replaced, id kept. A session is stored with its first keyframe (a session that
-  /// maps nothing leaves no trace); its end time is stored with the next session's first
-  /// keyframe or at shutdown. Each Open starts a session too. With PoseSource::kEstimate,
-  /// tracking starts over on the saved map: the camera may be anywhere, and the session's first
-  /// keyframe is placed by relocalisation before it is mapped. `started` (may be null)
-  /// receives the new session.
+  /// added from now on joins it. A current session that has mapped nothing is replaced, id kept. A
+  /// session is stored with its first keyframe (a session that maps nothing leaves no trace); its
+  /// end time is stored with the next session's first keyframe or at shutdown. Each Open starts a
+  /// session too. With PoseSource::kEstimate, tracking starts over on the saved map: the camera may
+  /// be anywhere, and the session's first keyframe is placed by relocalisation before it is mapped.
+  /// `started` (may be null) receives the new session.
   [[nodiscard]] ServiceStatus StartSession(const std::string& name, SessionSummary* started);
   /// Every stored session, ascending id, and the current one (also before its first keyframe,
   /// then with no keyframes); `current` (may be null) receives its id.
@@ -307,7 +352,14 @@ class MapServer {
   [[nodiscard]] ServiceStatus QueryObjects(const ObjectFilter& filter,
                                            std::vector<std::shared_ptr<const ObjectView>>* objects,
                                            std::uint64_t* version) const;
-  [[nodiscard]] ServiceStatus GetObject(ObjectId id, std::shared_ptr<const ObjectView>* object) const;
+  /// A present object, or a removed one (its tombstone, state kRemoved).
+  [[nodiscard]] ServiceStatus GetObject(ObjectId id,
+                                        std::shared_ptr<const ObjectView>* object) const;
+  /// The object changes (added, removed, moved) that match the filter, ordered by keyframe, from
+  /// one snapshot (its version in `version`).
+  [[nodiscard]] ServiceStatus ListChanges(const ChangeFilter& filter,
+                                          std::vector<MapObjectChange>* changes,
+                                          std::uint64_t* version) const;
 
   /// The inventory; with `since_version`, only classes with an object added, changed or
   /// removed after it (a class whose last object went away comes with count 0).
@@ -339,10 +391,9 @@ class MapServer {
   /// kNotFound for an id the map does not hold.
   [[nodiscard]] ServiceStatus KeyframeColor(KeyframeId id, ColorImage* color) const;
   /// The OctoMap (or the part in the box) as standard .bt bytes.
-  [[nodiscard]] ServiceStatus OctomapBytes(const std::optional<std::pair<Eigen::Vector3d,
-                                                                         Eigen::Vector3d>>& region,
-                                           std::string* bytes, std::size_t* leaf_count,
-                                           std::uint64_t* version) const;
+  [[nodiscard]] ServiceStatus OctomapBytes(
+      const std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>>& region, std::string* bytes,
+      std::size_t* leaf_count, std::uint64_t* version) const;
 
   /// Centres of the occupied voxels at the map resolution, at most `max_count` of them (a
   /// larger map is thinned evenly, every k-th voxel): what a visualisation publishes.

@@ -109,9 +109,30 @@ ServiceStatus MapServer::GetObject(ObjectId id, std::shared_ptr<const ObjectView
   const auto snapshot = impl_->Current();
   auto it = snapshot->objects.find(id);
   if (it == snapshot->objects.end()) {
-    return ServiceStatus::NotFound("unknown object id " + std::to_string(id));
+    it = snapshot->tombstones.find(id);
+    if (it == snapshot->tombstones.end()) {
+      return ServiceStatus::NotFound("unknown object id " + std::to_string(id));
+    }
   }
   *object = it->second;
+  return ServiceStatus::Ok();
+}
+
+ServiceStatus MapServer::ListChanges(const ChangeFilter& filter,
+                                     std::vector<MapObjectChange>* changes,
+                                     std::uint64_t* version) const {
+  if (filter.since_stamp_s && !std::isfinite(*filter.since_stamp_s)) {
+    return ServiceStatus::Invalid("since_stamp: not a finite number");
+  }
+  const auto snapshot = impl_->Current();
+  *version = snapshot->version;
+  changes->clear();
+  for (const MapObjectChange& change : snapshot->changes) {
+    if (filter.since_version && change.version <= *filter.since_version) continue;
+    if (filter.since_stamp_s && change.seen.stamp_s < *filter.since_stamp_s) continue;
+    if (filter.since_session && change.seen.session_id < *filter.since_session) continue;
+    changes->push_back(change);
+  }
   return ServiceStatus::Ok();
 }
 
@@ -161,8 +182,7 @@ ServiceStatus MapServer::QueryOccupancy(const Eigen::Vector3d& min_W, const Eige
                                         std::size_t max_voxels, RegionOccupancy* region,
                                         std::uint64_t* version) const {
   return impl_->RunHeavy([&] {
-    return impl_->ReadRegion(min_W, max_W, resolution_m, list_voxels, max_voxels, region,
-                             version);
+    return impl_->ReadRegion(min_W, max_W, resolution_m, list_voxels, max_voxels, region, version);
   });
 }
 
@@ -176,8 +196,7 @@ ServiceStatus MapServer::Impl::ReadRegion(const Eigen::Vector3d& min_W,
     return ServiceStatus::Invalid("resolution must be finite and >= 0");
   }
   const std::size_t limit = std::min<std::size_t>(
-      max_voxels == 0 ? config.max_listed_voxels : max_voxels,
-      config.max_listed_voxels);
+      max_voxels == 0 ? config.max_listed_voxels : max_voxels, config.max_listed_voxels);
   *version = Current()->version;
   mapper->ReadOccupancy([&](const OccupancyMap& map) {
     *region = map.QueryRegion(min_W, max_W, resolution_m, list_voxels ? limit : 0);
@@ -235,7 +254,8 @@ ServiceStatus MapServer::CastRay(const Eigen::Vector3d& origin_W,
                                  const Eigen::Vector3d& direction_W, double max_range_m,
                                  bool unknown_stops, RayHit* hit, ObjectId* object_hit,
                                  std::uint64_t* version) const {
-  if (!IsFiniteVector(origin_W)) return ServiceStatus::Invalid("origin: coordinates must be finite");
+  if (!IsFiniteVector(origin_W))
+    return ServiceStatus::Invalid("origin: coordinates must be finite");
   if (!IsFiniteVector(direction_W) || direction_W.norm() < 1e-9) {
     return ServiceStatus::Invalid("direction must be finite and non-zero");
   }
@@ -250,8 +270,7 @@ ServiceStatus MapServer::CastRay(const Eigen::Vector3d& origin_W,
   // Objects are not in the OctoMap: the ray also stops at the first model point it passes
   // within half a model voxel diagonal of, when that comes before the structure's voxel.
   const Eigen::Vector3d direction = direction_W.normalized();
-  const double radius =
-      0.5 * std::sqrt(3.0) * impl_->config.mapper.objects.model_voxel_size_m;
+  const double radius = 0.5 * std::sqrt(3.0) * impl_->config.mapper.objects.model_voxel_size_m;
   double reach = hit->hit ? hit->distance_m : max_range_m;
   *object_hit = 0;
   for (const auto& [id, view] : snapshot->objects) {

@@ -4,6 +4,7 @@
 #include <array>
 #include <map>
 #include <memory>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -18,7 +19,12 @@ class SnapshotBuilder {
  public:
   /// What changed between the previous snapshot and this one.
   struct Diff {
+    /// Published ids (a moved object's first id).
     std::vector<ObjectId> added, updated, removed;
+    /// The mapper's ids of the present objects in `added` and `updated` (the store's).
+    std::vector<ObjectId> changed_objects;
+    /// Object changes listed for the first time.
+    std::vector<MapObjectChange> object_changes;
   };
 
   /// A snapshot of `mapper` at `version`; `diff` (may be null) receives the object changes.
@@ -27,17 +33,28 @@ class SnapshotBuilder {
   /// The session and stamp of a keyframe, for the objects' first and last sightings: every
   /// keyframe before the Build that first shows an observation of it.
   void AddKeyframe(KeyframeId id, SessionId session_id, double stamp_s);
-
- private:
-  std::shared_ptr<const ObjectView> MakeView(const ObjectMap& objects, const MapObject& object,
-                                             bool confirmed, bool same_model, KeyframeId last_absent,
-                                             std::uint64_t version,
-                                             const std::shared_ptr<const ObjectView>& previous);
   /// The keyframe's session and stamp (unknown ones: 0).
   [[nodiscard]] ObjectSeen Seen(KeyframeId id) const;
+
+ private:
+  std::shared_ptr<ObjectView> MakeView(const ObjectMap& objects, const MapObject& object,
+                                       bool confirmed, bool same_model, KeyframeId last_absent,
+                                       std::uint64_t version,
+                                       const std::shared_ptr<const ObjectView>& previous);
+  /// Sets the view's published id, state, places and addition from its history (may be null).
+  void ApplyHistory(const ObjectHistory* history, ObjectId published_id, ObjectView* view) const;
+  [[nodiscard]] ObjectPlaceView PlaceView(const ObjectPlace& place) const;
+  /// The changes of `changes` with the version each was first listed at; new ones go to `diff`.
+  std::vector<MapObjectChange> ListChanges(const ObjectChanges& changes, std::uint64_t version,
+                                           Diff* diff);
   void Touch(int class_id, std::uint64_t version);
 
-  std::map<ObjectId, std::shared_ptr<const ObjectView>> views_;
+  std::map<ObjectId, std::shared_ptr<const ObjectView>> views_;  // by published id
+  std::map<ObjectId, std::shared_ptr<const ObjectView>> tombstones_;
+  // Published id -> the mapper's object its view (or tombstone) was made from.
+  std::map<ObjectId, ObjectId> view_sources_;
+  // (kind, published id, keyframe) of each change listed so far -> the version it was listed at.
+  std::map<std::tuple<int, ObjectId, KeyframeId>, std::uint64_t> change_versions_;
   std::map<KeyframeId, ObjectSeen> keyframes_;
   // ObjectMap::ModelKey behind each view's model.
   std::map<ObjectId, std::vector<std::pair<ObjectId, std::uint64_t>>> model_keys_;

@@ -1,0 +1,208 @@
+// Object changes through a MapServer: a table visited in two sessions, one cup taken away and one
+// moved in between. The removed cup is a tombstone (GetObject, ListChanges) and out of the
+// inventory, QueryObjects, IsFree and CastRay; the moved one keeps its id; WatchMap sends the
+// typed changes; a restart (also after kill -9: the store is all there is) lists the same changes.
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdio>
+
+#include "map_server/map_server.h"
+#include "test_scenes.h"
+#include "types/coco_classes.h"
+
+namespace objmap {
+namespace {
+
+using testing::SceneBox;
+
+const int kCup = CocoClassId("cup");
+const SceneBox kTable{{-0.6, -0.8, 0.60}, {0.6, 0.8, 0.70}, {150, 100, 60}};
+const SceneBox kWall{{1.5, -2.0, 0.0}, {1.6, 2.0, 2.5}, {220, 220, 220}};
+const SceneBox kCupOne{{-0.05, -0.25, 0.70}, {0.05, -0.15, 0.82}, {200, 30, 30}};
+const SceneBox kCupTwo{{-0.05, 0.15, 0.70}, {0.05, 0.25, 0.82}, {30, 30, 200}};
+const SceneBox kCupTwoMoved{{0.20, 0.45, 0.70}, {0.30, 0.55, 0.82}, {30, 30, 200}};
+
+const std::vector<Eigen::Vector3d> kFirstEyes = {
+    {-1.0, 0.0, 1.3}, {-1.0, 0.25, 1.3}, {-0.95, -0.25, 1.35}};
+const std::vector<Eigen::Vector3d> kSecondEyes = {
+    {-1.05, -0.35, 1.25}, {-0.9, 0.35, 1.3}, {-1.1, 0.1, 1.4}};
+
+std::string TempDatabase() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  return ::testing::TempDir() + "objmap_changes_" + std::to_string(getpid()) + "_" + info->name() +
+         ".db";
+}
+
+void RemoveDatabase(const std::string& path) {
+  for (const char* suffix : {"", "-wal", "-shm", ".lock"}) std::remove((path + suffix).c_str());
+}
+
+class MapServerChanges : public ::testing::Test {
+ protected:
+  MapServerChanges() : db_path_(TempDatabase()) { RemoveDatabase(db_path_); }
+  ~MapServerChanges() override { RemoveDatabase(db_path_); }
+
+  std::unique_ptr<MapServer> OpenServer() const {
+    std::string why;
+    auto server = MapServer::Open(config_, db_path_, nullptr, &why);
+    EXPECT_TRUE(server) << why;
+    return server;
+  }
+
+  // One keyframe per eye over the table, the wall and `cups`, each cup detected.
+  void MapVisit(MapServer* server, const std::vector<Eigen::Vector3d>& eyes,
+                const std::vector<SceneBox>& cups) const {
+    std::vector<SceneBox> boxes = {kTable, kWall};
+    boxes.insert(boxes.end(), cups.begin(), cups.end());
+    for (const Eigen::Vector3d& eye : eyes) {
+      const Eigen::Isometry3d T_W_C = testing::LookAt(eye, Eigen::Vector3d(0, 0.1, 0.7));
+      std::vector<Detection> detections;
+      for (const SceneBox& cup : cups) {
+        detections.push_back({testing::ProjectBox(cup, T_W_C, K_), kCup, 0.6f});
+      }
+      AddKeyframeOutcome outcome;
+      const ServiceStatus status = server->AddKeyframe(
+          testing::RenderFrame(boxes, K_, T_W_C, "frame"), detections, &outcome);
+      ASSERT_TRUE(status.ok()) << status.message;
+    }
+  }
+
+  // The present object nearest the box's centre (0: none within 5 cm).
+  static ObjectId ObjectAt(const MapServer& server, const SceneBox& box) {
+    const Eigen::Vector3f centre = ((box.lo + box.hi) * 0.5).cast<float>();
+    for (const auto& [id, view] : server.Snapshot()->objects) {
+      if ((view->centroid_W - centre).norm() < 0.05f) return id;
+    }
+    return 0;
+  }
+
+  static std::vector<MapObjectChange> Changes(const MapServer& server,
+                                              const ChangeFilter& filter = {}) {
+    std::vector<MapObjectChange> changes;
+    std::uint64_t version = 0;
+    const ServiceStatus status = server.ListChanges(filter, &changes, &version);
+    EXPECT_TRUE(status.ok()) << status.message;
+    return changes;
+  }
+
+  const MapServerConfig config_;
+  CameraIntrinsics K_;
+  std::string db_path_;
+};
+
+TEST_F(MapServerChanges, ARemovedCupIsATombstoneAndAMovedOneKeepsItsId) {
+  ObjectId cup_one = 0, cup_two = 0;
+  std::vector<MapObjectChange> listed;
+  {
+    auto server = OpenServer();
+    ASSERT_TRUE(server);
+    MapVisit(server.get(), kFirstEyes, {kCupOne, kCupTwo});
+    cup_one = ObjectAt(*server, kCupOne);
+    cup_two = ObjectAt(*server, kCupTwo);
+    ASSERT_NE(cup_one, 0);
+    ASSERT_NE(cup_two, 0);
+    const std::uint64_t first_visit_version = server->Snapshot()->version;
+    EXPECT_TRUE(Changes(*server).empty());
+
+    SessionSummary second;
+    ASSERT_TRUE(server->StartSession("second visit", &second).ok());
+    MapVisit(server.get(), kSecondEyes, {kCupTwoMoved});
+
+    listed = Changes(*server);
+    ASSERT_EQ(listed.size(), 2u);
+    const MapObjectChange* removed = nullptr;
+    const MapObjectChange* moved = nullptr;
+    for (const MapObjectChange& change : listed) {
+      if (change.change.kind == ObjectChange::Kind::kRemoved) removed = &change;
+      if (change.change.kind == ObjectChange::Kind::kMoved) moved = &change;
+      EXPECT_EQ(change.seen.session_id, second.session.id);
+      EXPECT_GT(change.version, first_visit_version);
+    }
+    ASSERT_NE(removed, nullptr);
+    ASSERT_NE(moved, nullptr);
+    EXPECT_EQ(removed->change.id, cup_one);
+    EXPECT_EQ(moved->change.id, cup_two);
+    EXPECT_NEAR(moved->change.from_W.y(), 0.2f, 0.03f);
+    EXPECT_NEAR(moved->change.centroid_W.y(), 0.5f, 0.03f);
+    EXPECT_EQ(moved->from_last_seen.session_id, 1);
+
+    // The moved cup is where it is now, under its id; the removed one only as a tombstone.
+    const auto snapshot = server->Snapshot();
+    ASSERT_EQ(snapshot->objects.count(cup_two), 1u);
+    EXPECT_EQ(snapshot->objects.at(cup_two)->state, ObjectState::kMoved);
+    EXPECT_NEAR(snapshot->objects.at(cup_two)->centroid_W.y(), 0.5f, 0.03f);
+    ASSERT_EQ(snapshot->objects.at(cup_two)->previous_places.size(), 1u);
+    EXPECT_EQ(snapshot->objects.count(cup_one), 0u);
+    ASSERT_EQ(snapshot->tombstones.count(cup_one), 1u);
+    std::shared_ptr<const ObjectView> tombstone;
+    ASSERT_TRUE(server->GetObject(cup_one, &tombstone).ok());
+    EXPECT_EQ(tombstone->state, ObjectState::kRemoved);
+    EXPECT_EQ(tombstone->removed.session_id, second.session.id);
+    std::vector<InventoryEntry> inventory;
+    std::uint64_t version = 0;
+    ASSERT_TRUE(server->Inventory(std::nullopt, &inventory, &version).ok());
+    ASSERT_EQ(inventory.size(), 1u);
+    EXPECT_EQ(inventory[0].objects, std::vector<ObjectId>{cup_two});
+
+    // Where cup one stood is free for a planner, and a ray through it hits no object.
+    const Eigen::Vector3d lo = kCupOne.lo + Eigen::Vector3d(0.01, 0.01, 0.02);
+    const Eigen::Vector3d hi = kCupOne.hi - Eigen::Vector3d(0.01, 0.01, 0.01);
+    bool free = false;
+    RegionOccupancy counts;
+    std::vector<ObjectId> inside;
+    ASSERT_TRUE(server->IsFree(lo, hi, true, &free, &counts, &inside, &version).ok());
+    EXPECT_TRUE(inside.empty());
+    RayHit hit;
+    ObjectId hit_object = -1;
+    const Eigen::Vector3d origin(-1.0, -0.2, 0.76);
+    ASSERT_TRUE(
+        server->CastRay(origin, Eigen::Vector3d::UnitX(), 1.2, false, &hit, &hit_object, &version)
+            .ok());
+    EXPECT_NE(hit_object, cup_one);
+
+    // Filters: nothing after the current version; everything since session 2; nothing since 3.
+    ChangeFilter after_now;
+    after_now.since_version = snapshot->version;
+    EXPECT_TRUE(Changes(*server, after_now).empty());
+    ChangeFilter since_second;
+    since_second.since_session = second.session.id;
+    EXPECT_EQ(Changes(*server, since_second).size(), 2u);
+    ChangeFilter since_third;
+    since_third.since_session = second.session.id + 1;
+    EXPECT_TRUE(Changes(*server, since_third).empty());
+    ChangeFilter bad;
+    bad.since_stamp_s = std::nan("");
+    std::vector<MapObjectChange> none;
+    EXPECT_EQ(server->ListChanges(bad, &none, &version).code, StatusCode::kInvalidArgument);
+
+    // WatchMap: every change was sent once, typed, at the version it was first listed.
+    std::size_t watched = 0;
+    for (const MapChange& change :
+         server->ChangesSince(first_visit_version, std::chrono::milliseconds(100))) {
+      for (const MapObjectChange& object_change : change.object_changes) {
+        EXPECT_EQ(object_change.version, change.version);
+        ++watched;
+      }
+    }
+    EXPECT_EQ(watched, 2u);
+  }
+  // The store holds the keyframes and observations: a restart lists the same changes.
+  auto restarted = OpenServer();
+  ASSERT_TRUE(restarted);
+  const std::vector<MapObjectChange> again = Changes(*restarted);
+  ASSERT_EQ(again.size(), listed.size());
+  for (std::size_t i = 0; i < listed.size(); ++i) {
+    EXPECT_EQ(again[i].change.kind, listed[i].change.kind);
+    EXPECT_EQ(again[i].change.id, listed[i].change.id);
+    EXPECT_EQ(again[i].seen.keyframe_id, listed[i].seen.keyframe_id);
+    EXPECT_EQ(again[i].seen.session_id, listed[i].seen.session_id);
+  }
+  std::shared_ptr<const ObjectView> tombstone;
+  ASSERT_TRUE(restarted->GetObject(cup_one, &tombstone).ok());
+  EXPECT_EQ(tombstone->state, ObjectState::kRemoved);
+}
+
+}  // namespace
+}  // namespace objmap
