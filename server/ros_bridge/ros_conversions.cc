@@ -417,6 +417,42 @@ void MapChangeToMsg(const MapChange& change, objmap_msgs::MapChange* msg) {
   msg->added_objects.assign(change.added.begin(), change.added.end());
   msg->updated_objects.assign(change.updated.begin(), change.updated.end());
   msg->removed_objects.assign(change.removed.begin(), change.removed.end());
+  for (const MapObjectChange& object_change : change.object_changes) {
+    ObjectChangeToMsg(object_change, &msg->object_changes.emplace_back());
+  }
+}
+
+void ObjectChangeToMsg(const MapObjectChange& entry, objmap_msgs::ObjectChange* msg) {
+  const ObjectChange& change = entry.change;
+  switch (change.kind) {
+    case ObjectChange::Kind::kAdded:
+      msg->kind = objmap_msgs::ObjectChange::ADDED;
+      break;
+    case ObjectChange::Kind::kRemoved:
+      msg->kind = objmap_msgs::ObjectChange::REMOVED;
+      break;
+    case ObjectChange::Kind::kMoved:
+      msg->kind = objmap_msgs::ObjectChange::MOVED;
+      break;
+  }
+  msg->object_id = change.id;
+  msg->class_id = change.class_id;
+  msg->class_name = std::string(ObjectClassName(change.class_id));
+  msg->keyframe_id = entry.seen.keyframe_id;
+  msg->session_id = entry.seen.session_id;
+  msg->stamp = entry.seen.stamp_s;
+  msg->map_version = entry.version;
+  auto point = [](const Eigen::Vector3f& v) {
+    geometry_msgs::Point p;
+    p.x = v.x();
+    p.y = v.y();
+    p.z = v.z();
+    return p;
+  };
+  msg->position = point(change.centroid_W);
+  msg->bounds_min = point(change.min_W);
+  msg->bounds_max = point(change.max_W);
+  if (change.kind == ObjectChange::Kind::kMoved) msg->from = point(change.from_W);
 }
 
 }  // namespace objmap::ros_bridge

@@ -12,6 +12,7 @@
 #include <objmap_msgs/InventoryEntry.h>
 #include <objmap_msgs/MapChange.h>
 #include <objmap_msgs/Object.h>
+#include <objmap_msgs/ObjectChange.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
@@ -94,5 +95,6 @@ struct FrameMessages {
 void ObjectToMsg(const ObjectView& view, bool include_model, objmap_msgs::Object* object);
 void InventoryEntryToMsg(const InventoryEntry& entry, objmap_msgs::InventoryEntry* msg);
 void MapChangeToMsg(const MapChange& change, objmap_msgs::MapChange* msg);
+void ObjectChangeToMsg(const MapObjectChange& change, objmap_msgs::ObjectChange* msg);
 
 }  // namespace objmap::ros_bridge

@@ -157,6 +157,7 @@ struct MapNode::Impl {
   ros::Publisher occupied_pub;
   ros::Publisher object_cloud_pub;
   ros::Publisher changes_pub;
+  ros::Publisher object_changes_pub;  // ~object_changes: one ObjectChange per added, removed, moved
   std::atomic<bool> stopping{false};
   std::thread publisher_thread;
 };

@@ -52,6 +52,7 @@ void MapNode::Impl::AdvertiseTopics() {
   occupied_pub = private_node.advertise<sensor_msgs::PointCloud2>("occupied_cells", 1, true);
   object_cloud_pub = private_node.advertise<sensor_msgs::PointCloud2>("object_cloud", 10);
   changes_pub = private_node.advertise<objmap_msgs::MapChange>("map_changes", 100);
+  object_changes_pub = private_node.advertise<objmap_msgs::ObjectChange>("object_changes", 100);
   if (config.estimates_poses()) {
     trajectory_pub = private_node.advertise<nav_msgs::Path>("trajectory", 1, true);
   }
@@ -93,8 +94,8 @@ void MapNode::Impl::PublishMarkers(const MapSnapshot& snapshot) {
     label.scale.z = 0.06;
     label.color.a = 1.0f;
     std::ostringstream text;
-    text << ObjectClassName(view->class_id) << " #" << id << " " << std::fixed << std::setprecision(2)
-         << view->confidence;
+    text << ObjectClassName(view->class_id) << " #" << id << " " << std::fixed
+         << std::setprecision(2) << view->confidence;
     label.text = text.str();
     markers.markers.push_back(label);
   }
@@ -130,6 +131,9 @@ void MapNode::Impl::PublishChangesLoop() {
       objmap_msgs::MapChange msg;
       ros_bridge::MapChangeToMsg(change, &msg);
       changes_pub.publish(msg);
+      for (const objmap_msgs::ObjectChange& object_change : msg.object_changes) {
+        object_changes_pub.publish(object_change);
+      }
       seen = std::max(seen, change.version);
       if (change.kind == MapChange::Kind::kKeyframeAdded) ++keyframes_since_cells;
       if (change.kind == MapChange::Kind::kPosesUpdated) regenerated = true;
