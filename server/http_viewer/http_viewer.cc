@@ -14,6 +14,7 @@
 #include <sstream>
 #include <thread>
 
+#include "http_viewer/viewer_json.h"
 #include "render/map_picture.h"
 #include "types/coco_classes.h"
 #include "types/install_location.h"
@@ -69,8 +70,8 @@ bool FindViewerFolder(const std::string& configured, std::string* folder, std::s
     return false;
   }
 #if defined(OBJMAP_BUILD_TREE) && defined(OBJMAP_SOURCE_VIEWER_DIR)
-  const auto candidates =
-      InstalledDataCandidates("viewer", kViewerFolderEnv, OBJMAP_BUILD_TREE, OBJMAP_SOURCE_VIEWER_DIR);
+  const auto candidates = InstalledDataCandidates("viewer", kViewerFolderEnv, OBJMAP_BUILD_TREE,
+                                                  OBJMAP_SOURCE_VIEWER_DIR);
 #else
   const auto candidates = InstalledDataCandidates("viewer", kViewerFolderEnv, "", "");
 #endif
@@ -168,13 +169,20 @@ void SendError(httplib::Response& response, const ApiError& error) {
 
 int StatusOf(const ServiceStatus& status) {
   switch (status.code) {
-    case StatusCode::kOk: return 200;
-    case StatusCode::kInvalidArgument: return 400;
-    case StatusCode::kNotFound: return 404;
-    case StatusCode::kResourceExhausted: return 429;
-    case StatusCode::kUnavailable: return 503;
-    case StatusCode::kFailedPrecondition: return 409;
-    case StatusCode::kInternal: return 500;
+    case StatusCode::kOk:
+      return 200;
+    case StatusCode::kInvalidArgument:
+      return 400;
+    case StatusCode::kNotFound:
+      return 404;
+    case StatusCode::kResourceExhausted:
+      return 429;
+    case StatusCode::kUnavailable:
+      return 503;
+    case StatusCode::kFailedPrecondition:
+      return 409;
+    case StatusCode::kInternal:
+      return 500;
   }
   return 500;
 }
@@ -217,7 +225,8 @@ Eigen::Vector3d ParsePoint(const std::string& text, const std::string& name) {
   for (int axis = 0; axis < 3; ++axis) {
     const std::size_t comma = text.find(',', start);
     if ((axis < 2) != (comma != std::string::npos)) {
-      throw ApiError{400, name + " must be three comma-separated numbers x,y,z, not '" + text + "'"};
+      throw ApiError{400,
+                     name + " must be three comma-separated numbers x,y,z, not '" + text + "'"};
     }
     const std::string part = text.substr(start, axis < 2 ? comma - start : std::string::npos);
     char* end = nullptr;
@@ -236,106 +245,19 @@ bool ParseBool(const std::string& text, const std::string& name) {
   throw ApiError{400, name + " must be true or false, not '" + text + "'"};
 }
 
-std::string HexColour(const std::string& class_name) {
-  const RgbColour colour = ClassColour(class_name);
-  char text[8];
-  std::snprintf(text, sizeof(text), "#%02x%02x%02x", colour[0], colour[1], colour[2]);
-  return text;
-}
-
-json VectorJson(const Eigen::Vector3f& v) { return json::array({v.x(), v.y(), v.z()}); }
-
-std::string ClassName(int class_id) { return std::string(ObjectClassName(class_id)); }
-
-// What the object list and the inventory table need: no scores, no model. `in_inventory`: the
-// inventory counts it (a confirmed object of no named class is not counted by default).
-json ObjectSummary(const ObjectView& view, bool in_inventory) {
-  const std::string name = ClassName(view.class_id);
-  return json{{"id", view.id},
-              {"class", name},
-              {"class_id", view.class_id},
-              {"colour", HexColour(name)},
-              {"confidence", view.confidence},
-              {"in_inventory", in_inventory},
-              {"confirmed", view.confirmed},
-              {"observations", view.observations},
-              {"keyframes", view.keyframes.size()},
-              {"points", view.model_W ? view.model_W->size() : 0},
-              {"centroid", VectorJson(view.centroid_W)},
-              {"min", VectorJson(view.min_W)},
-              {"max", VectorJson(view.max_W)},
-              {"changed_version", view.changed_version}};
-}
-
-// The ids the inventory counts.
-std::set<ObjectId> InventoryObjects(const MapSnapshot& snapshot) {
-  std::set<ObjectId> counted;
-  for (const InventoryEntry& entry : snapshot.inventory) {
-    counted.insert(entry.objects.begin(), entry.objects.end());
-  }
-  return counted;
-}
-
-json MapJson(const ViewerMap& map) {
-  const std::shared_ptr<const MapSnapshot> snapshot = map.Snapshot();
-  json inventory = json::array();
-  for (const InventoryEntry& entry : snapshot->inventory) {
-    const std::string name = ClassName(entry.class_id);
-    inventory.push_back({{"class", name},
-                         {"class_id", entry.class_id},
-                         {"colour", HexColour(name)},
-                         {"count", entry.count},
-                         {"mean_confidence", entry.mean_confidence},
-                         {"objects", entry.objects}});
-  }
-  const std::set<ObjectId> counted = InventoryObjects(*snapshot);
-  json objects = json::array();
-  for (const auto& [id, view] : snapshot->objects) {
-    objects.push_back(ObjectSummary(*view, counted.count(id) > 0));
-  }
-  const std::optional<Eigen::Vector3d> up = map.Up();
-  return json{{"source", map.Description()},
-              {"up", up ? json::array({up->x(), up->y(), up->z()}) : json(nullptr)},
-              {"version", snapshot->version},
-              {"keyframes", snapshot->num_keyframes},
-              {"inventory", inventory},
-              {"objects", objects}};
-}
-
 // The object `id_text` names in `snapshot`; 400 for a malformed id, 404 for an unknown one.
-std::shared_ptr<const ObjectView> FindObject(const MapSnapshot& snapshot, const std::string& id_text) {
+std::shared_ptr<const ObjectView> FindObject(const MapSnapshot& snapshot,
+                                             const std::string& id_text) {
   const ObjectId id = ParseInteger(id_text, "object id", 1, INT64_MAX);
-  const auto it = snapshot.objects.find(id);
-  if (it == snapshot.objects.end()) {
+  auto it = snapshot.objects.find(id);
+  if (it == snapshot.objects.end()) it = snapshot.tombstones.find(id);  // removed: its ghost
+  if (it == snapshot.objects.end() || it == snapshot.tombstones.end()) {
     throw ApiError{404, "object " + id_text + " is not in the map (version " +
                             std::to_string(snapshot.version) + ")"};
   }
   return it->second;
 }
 
-json ObjectDetailJson(const MapSnapshot& snapshot, const ObjectView& view) {
-  json detail = ObjectSummary(view, InventoryObjects(snapshot).count(view.id) > 0);
-  json scores = json::array();
-  for (const auto& [class_id, score] : view.scores) {
-    scores.push_back({{"class", ClassName(class_id)}, {"score", score}});
-  }
-  detail["scores"] = scores;
-  json sightings = json::array();
-  for (const ObjectSighting& sighting : view.sightings) {
-    sightings.push_back(
-        {{"keyframe", sighting.keyframe_id},
-         {"box", {sighting.box.x_min, sighting.box.y_min, sighting.box.x_max, sighting.box.y_max}},
-         {"class", ClassName(sighting.class_id)},
-         {"score", sighting.score},
-         {"image", "/api/objects/" + std::to_string(view.id) + "/sightings/" +
-                       std::to_string(sighting.keyframe_id) + ".jpg"}});
-  }
-  detail["sightings"] = sightings;
-  return detail;
-}
-
-// Little-endian float32 x y z per point, then r g b bytes per point (grey when uncoloured):
-// what a Float32Array and a Uint8Array read without parsing.
 std::string ModelBytes(const ColoredPoints& model) {
   const std::size_t n = model.points.size();
   std::string bytes(n * 15, '\0');
@@ -356,7 +278,8 @@ std::string ModelBytes(const ColoredPoints& model) {
 // The colour image around `box` (a quarter of its size on each side, at least 24 px), the box
 // drawn in the class colour, at most 320 px on its long side.
 std::string SightingJpeg(const ColorImage& color, const ObjectSighting& sighting) {
-  const cv::Mat rgb(color.height, color.width, CV_8UC3, const_cast<std::uint8_t*>(color.rgb.data()));
+  const cv::Mat rgb(color.height, color.width, CV_8UC3,
+                    const_cast<std::uint8_t*>(color.rgb.data()));
   const BoundingBox2D& box = sighting.box;
   const float margin = std::max(24.f, 0.25f * std::max(box.Width(), box.Height()));
   const int x0 = std::clamp(static_cast<int>(std::floor(box.x_min - margin)), 0, color.width - 1);
@@ -365,7 +288,7 @@ std::string SightingJpeg(const ColorImage& color, const ObjectSighting& sighting
   const int y1 = std::clamp(static_cast<int>(std::ceil(box.y_max + margin)), y0 + 1, color.height);
   cv::Mat crop;
   cv::cvtColor(rgb(cv::Rect(x0, y0, x1 - x0, y1 - y0)), crop, cv::COLOR_RGB2BGR);
-  const RgbColour colour = ClassColour(ClassName(sighting.class_id));
+  const RgbColour colour = ClassColour(std::string(ObjectClassName(sighting.class_id)));
   cv::rectangle(crop, cv::Point(static_cast<int>(box.x_min) - x0, static_cast<int>(box.y_min) - y0),
                 cv::Point(static_cast<int>(box.x_max) - x0, static_cast<int>(box.y_max) - y0),
                 cv::Scalar(colour[2], colour[1], colour[0]), 2);
@@ -380,19 +303,11 @@ std::string SightingJpeg(const ColorImage& color, const ObjectSighting& sighting
 }
 
 const char* ContentType(const std::string& file) {
-  if (file.size() >= 5 && file.compare(file.size() - 5, 5, ".html") == 0) return "text/html; charset=utf-8";
-  if (file.size() >= 4 && file.compare(file.size() - 4, 4, ".css") == 0) return "text/css; charset=utf-8";
+  if (file.size() >= 5 && file.compare(file.size() - 5, 5, ".html") == 0)
+    return "text/html; charset=utf-8";
+  if (file.size() >= 4 && file.compare(file.size() - 4, 4, ".css") == 0)
+    return "text/css; charset=utf-8";
   return "text/javascript; charset=utf-8";
-}
-
-json ChangeJson(const MapChange& change) {
-  return json{{"version", change.version},
-              {"kind", change.kind == MapChange::Kind::kKeyframeAdded ? "keyframe_added"
-                                                                       : "poses_updated"},
-              {"keyframe", change.keyframe_id},
-              {"added", change.added},
-              {"updated", change.updated},
-              {"removed", change.removed}};
 }
 
 }  // namespace
@@ -439,9 +354,9 @@ httplib::Server::Handler Api(Handler handler) {
 
 void HttpViewer::Impl::Routes() {
   server.Get("/api/map", Api([this](const httplib::Request& request, httplib::Response& response) {
-    CheckParameters(request, {});
-    SendJson(response, MapJson(*map));
-  }));
+               CheckParameters(request, {});
+               SendJson(response, MapJson(*map));
+             }));
   server.Get(R"(/api/objects/([^/]+))",
              Api([this](const httplib::Request& request, httplib::Response& response) {
                CheckParameters(request, {});
@@ -467,15 +382,20 @@ void HttpViewer::Impl::Routes() {
              Api([this](const httplib::Request& request, httplib::Response& response) {
                Structure(request, response);
              }));
-  server.Get("/api/changes", Api([this](const httplib::Request& request,
-                                        httplib::Response& response) { Changes(request, response); }));
-  server.Get("/api/is_free", Api([this](const httplib::Request& request,
-                                        httplib::Response& response) { IsFree(request, response); }));
+  server.Get("/api/changes",
+             Api([this](const httplib::Request& request, httplib::Response& response) {
+               Changes(request, response);
+             }));
+  server.Get("/api/is_free",
+             Api([this](const httplib::Request& request, httplib::Response& response) {
+               IsFree(request, response);
+             }));
   server.Get(R"(/api/.*)", Api([](const httplib::Request& request, httplib::Response&) {
-    throw ApiError{404, "no such API path: " + request.path +
+               throw ApiError{
+                   404, "no such API path: " + request.path +
                             " (see /api/map, /api/objects/<id>, /api/structure, /api/changes, "
                             "/api/is_free)"};
-  }));
+             }));
   // Everything else: one of the viewer's own files, or 404. The table is looked up with the
   // decoded path as a whole, so "..", "%2e%2e", doubled slashes or absolute paths find nothing.
   server.Get(R"(/.*)", [this](const httplib::Request& request, httplib::Response& response) {
@@ -505,7 +425,8 @@ void HttpViewer::Impl::Sighting(const httplib::Request& request, httplib::Respon
   ColorImage color;
   const ServiceStatus status = map->KeyframeColor(keyframe, &color);
   if (!status.ok()) throw ApiError{StatusOf(status), status.message};
-  if (color.empty() || color.rgb.size() != static_cast<std::size_t>(color.width) * color.height * 3) {
+  if (color.empty() ||
+      color.rgb.size() != static_cast<std::size_t>(color.width) * color.height * 3) {
     throw ApiError{404, "keyframe " + std::to_string(keyframe) + " has no colour image"};
   }
   // Not cached: another map served later on the same port has other images under the same paths.
@@ -567,8 +488,8 @@ void HttpViewer::Impl::Changes(const httplib::Request& request, httplib::Respons
   do {
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
         deadline - std::chrono::steady_clock::now());
-    changes = map->ChangesSince(since, std::clamp(left, std::chrono::milliseconds(0),
-                                                  std::chrono::milliseconds(500)));
+    changes = map->ChangesSince(
+        since, std::clamp(left, std::chrono::milliseconds(0), std::chrono::milliseconds(500)));
   } while (changes.empty() && !stopping && std::chrono::steady_clock::now() < deadline);
   json list = json::array();
   for (const MapChange& change : changes) list.push_back(ChangeJson(change));
@@ -614,8 +535,8 @@ std::unique_ptr<HttpViewer> HttpViewer::Start(const HttpViewerConfig& config, co
   for (const std::string& file : ViewerFiles()) {
     std::ifstream in(fs::path(config.viewer_folder) / file, std::ios::binary);
     if (!in) {
-      *why = "viewer file " + (fs::path(config.viewer_folder) / file).string() + " cannot be read; " +
-             kInstallHint;
+      *why = "viewer file " + (fs::path(config.viewer_folder) / file).string() +
+             " cannot be read; " + kInstallHint;
       return nullptr;
     }
     std::ostringstream content;
@@ -630,21 +551,21 @@ std::unique_ptr<HttpViewer> HttpViewer::Start(const HttpViewerConfig& config, co
   // A page on loopback is reachable from any web page the user opens (DNS rebinding): a request
   // whose Host is not this loopback address is refused.
   const bool loopback = IsLoopbackHost(impl.host);
-  impl.server.set_pre_routing_handler(
-      [loopback](const httplib::Request& request, httplib::Response& response) {
-        if (!loopback) return httplib::Server::HandlerResponse::Unhandled;
-        std::string host = request.get_header_value("Host");
-        if (const std::size_t colon = host.rfind(':');
-            colon != std::string::npos && host.find(']') == std::string::npos) {
-          host = host.substr(0, colon);
-        } else if (!host.empty() && host.front() == '[') {
-          host = host.substr(1, host.find(']') - 1);
-        }
-        if (IsLoopbackHost(host)) return httplib::Server::HandlerResponse::Unhandled;
-        SendError(response, {403, "Host '" + request.get_header_value("Host") +
-                                      "' is not this loopback viewer"});
-        return httplib::Server::HandlerResponse::Handled;
-      });
+  impl.server.set_pre_routing_handler([loopback](const httplib::Request& request,
+                                                 httplib::Response& response) {
+    if (!loopback) return httplib::Server::HandlerResponse::Unhandled;
+    std::string host = request.get_header_value("Host");
+    if (const std::size_t colon = host.rfind(':');
+        colon != std::string::npos && host.find(']') == std::string::npos) {
+      host = host.substr(0, colon);
+    } else if (!host.empty() && host.front() == '[') {
+      host = host.substr(1, host.find(']') - 1);
+    }
+    if (IsLoopbackHost(host)) return httplib::Server::HandlerResponse::Unhandled;
+    SendError(response,
+              {403, "Host '" + request.get_header_value("Host") + "' is not this loopback viewer"});
+    return httplib::Server::HandlerResponse::Handled;
+  });
   impl.Routes();
   if (port == 0) {
     port = impl.server.bind_to_any_port(impl.host);
@@ -652,7 +573,8 @@ std::unique_ptr<HttpViewer> HttpViewer::Start(const HttpViewerConfig& config, co
     port = -1;
   }
   if (port < 0) {
-    *why = "cannot listen on " + config.listen_address + " (in use, or not an address of this machine)";
+    *why = "cannot listen on " + config.listen_address +
+           " (in use, or not an address of this machine)";
     return nullptr;
   }
   impl.port = port;

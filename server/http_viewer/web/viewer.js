@@ -1,5 +1,6 @@
 // objmap's web viewer: the map server's structure and objects in 3D, the inventory, each
-// object's scores and the keyframe crops that saw it; follows the live map through
+// object's scores and the keyframe crops that saw it, removed objects as ghosts and the old
+// places of moved ones (changes since a chosen session); follows the live map through
 // /api/changes (a long poll) and asks /api/is_free for a box the user draws.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
@@ -18,6 +19,7 @@ const state = {
   updates: 0,                // map answers applied (1 after the first load)
   structureLoads: 0,         // structure answers requested
   frames: 0,                 // frames drawn
+  ghosts: [],                // {kind: 'removed' | 'moved_from', id, objects: [THREE.Object3D]}
 };
 window.objmapViewer = state;
 
@@ -209,6 +211,86 @@ async function applyObjects(map) {
   await Promise.all(loads);
 }
 
+// ---------------------------------------------------------------- changes
+
+const GHOST_COLOUR = 0x8a8a8a;
+
+// The first session whose changes are shown (0: every session).
+function changesSince() {
+  return Number(document.getElementById('change-session').value) || 0;
+}
+
+// A translucent box with a dashed outline where an object was.
+function ghostBox(min, max, colour) {
+  const box = new THREE.Box3(new THREE.Vector3(...min), new THREE.Vector3(...max));
+  const size = box.getSize(new THREE.Vector3());
+  const centre = box.getCenter(new THREE.Vector3());
+  const fill = new THREE.Mesh(new THREE.BoxGeometry(size.x, size.y, size.z),
+    new THREE.MeshBasicMaterial({ color: colour, transparent: true, opacity: 0.18, depthWrite: false }));
+  fill.position.copy(centre);
+  const edges = new THREE.LineSegments(new THREE.EdgesGeometry(fill.geometry),
+    new THREE.LineDashedMaterial({ color: colour, dashSize: 0.02, gapSize: 0.015 }));
+  edges.position.copy(centre);
+  edges.computeLineDistances();
+  return [fill, edges];
+}
+
+// Ghosts of removed objects and of the places moved objects left, for changes seen in the
+// selected session or later; an arrow-like line from each old place to where the object is now.
+function applyGhosts(map) {
+  for (const ghost of state.ghosts) {
+    scene.remove(...ghost.objects);
+    for (const object of ghost.objects) object.geometry.dispose();
+  }
+  state.ghosts = [];
+  const since = changesSince();
+  for (const tombstone of map.tombstones || []) {
+    if (!tombstone.removed || tombstone.removed.session < since) continue;
+    const objects = ghostBox(tombstone.min, tombstone.max, GHOST_COLOUR);
+    state.ghosts.push({ kind: 'removed', id: tombstone.id, objects });
+  }
+  for (const object of map.objects) {
+    for (const place of object.previous_places || []) {
+      if (place.seen_empty.session < since) continue;
+      const objects = ghostBox(place.min, place.max, new THREE.Color(object.colour).getHex());
+      const line = new THREE.Line(new THREE.BufferGeometry().setFromPoints([
+        new THREE.Vector3(...place.centroid), new THREE.Vector3(...object.centroid)]),
+      new THREE.LineBasicMaterial({ color: new THREE.Color(object.colour) }));
+      objects.push(line);
+      state.ghosts.push({ kind: 'moved_from', id: object.id, objects });
+    }
+  }
+  for (const ghost of state.ghosts) scene.add(...ghost.objects);
+  requestRender();
+}
+
+function renderChanges(map) {
+  const select = document.getElementById('change-session');
+  const chosen = select.value;
+  const options = ['<option value="0">every session</option>'].concat(
+    (map.sessions || []).map((id) => `<option value="${id}">session ${id} and later</option>`));
+  if (select.dataset.sessions !== options.join('')) {
+    select.innerHTML = options.join('');
+    select.dataset.sessions = options.join('');
+    if ([...select.options].some((o) => o.value === chosen)) select.value = chosen;
+  }
+  const since = changesSince();
+  const body = document.querySelector('#changes tbody');
+  body.innerHTML = '';
+  for (const change of (map.changes || []).filter((c) => c.seen.session >= since)) {
+    const row = document.createElement('tr');
+    row.dataset.kind = change.kind;
+    row.innerHTML = `<td>${change.kind}</td><td></td><td>${change.class}</td><td>${change.seen.session}</td>`;
+    row.children[1].appendChild(objectLink(change.id));
+    body.appendChild(row);
+  }
+}
+document.getElementById('change-session').addEventListener('change', () => {
+  if (!state.map) return;
+  renderChanges(state.map);
+  applyGhosts(state.map);
+});
+
 // ---------------------------------------------------------------- panel
 
 function status(text) { document.getElementById('status').textContent = text; }
@@ -259,7 +341,9 @@ async function select(id) {
   document.getElementById('object-facts').textContent =
       `confidence ${detail.confidence.toFixed(2)} · ${detail.observations} observations in ` +
       `${detail.keyframes} keyframes · ${detail.points} model points` +
-      (detail.in_inventory ? '' : ' · not in the inventory');
+      (detail.in_inventory ? '' : ' · not in the inventory') +
+      (detail.state === 'removed' ? ` · removed (seen gone in session ${detail.removed.session})` : '') +
+      (detail.state === 'moved' ? ` · moved (${detail.previous_places.length} earlier place(s))` : '');
   const scores = document.getElementById('object-scores');
   scores.replaceChildren();
   for (const { class: name, score } of detail.scores) {
@@ -380,9 +464,12 @@ async function refresh() {
   state.keyframes = map.keyframes;
   state.source = map.source;
   renderInventory(map);
+  renderChanges(map);
   await applyObjects(map);
+  applyGhosts(map);
   if (state.selected !== null) {
-    if (map.objects.some((o) => o.id === state.selected)) select(state.selected);
+    const known = map.objects.concat(map.tombstones || []);
+    if (known.some((o) => o.id === state.selected)) select(state.selected);
     else document.getElementById('object').hidden = true;
   }
   state.updates += 1;
