@@ -87,7 +87,7 @@ struct ChangeConfig {
   bool enabled = true;
   /// A point is seen through when the measured depth lies more than this (plus per_m2 x depth
   /// squared: the sensor's noise grows with the square of the range) behind it, metres.
-  float see_through_margin_m = 0.03f;
+  float see_through_margin_m = 0.02f;
   float see_through_margin_per_m2 = 0.005f;
   /// A view judges a place only when this share of the object's sample points is in view
   /// (ObjectVisibility::visible_fraction) ...
@@ -104,7 +104,7 @@ struct ChangeConfig {
   /// one label, their models' sizes (the two largest extents of the bounding boxes) differ by at
   /// most this factor each, and they lie at least min_move_distance_m apart (nearer, the
   /// association would have kept them one object).
-  float max_move_size_ratio = 1.6f;
+  float max_move_size_ratio = 2.0f;
   float min_move_distance_m = 0.2f;
   /// ... and their models' mean colours (RGB, 0..255 per channel) lie at most this far apart
   /// (Euclidean): a red mug taken away and a white one put down elsewhere are two changes, not
