@@ -172,6 +172,43 @@ TEST_F(ViewerScene, TheMapAnswerIsTheServersInventoryAndObjects) {
   EXPECT_GT(map["up"][2].get<double>(), 0.8);
 }
 
+TEST_F(ViewerScene, ARemovedCupIsAGhostWithItsChange) {
+  StartLiveViewer();
+  ObjectId red_cup = 0;  // the cup at y = -0.2
+  for (const auto& [id, view] : server_->Snapshot()->objects) {
+    if (view->centroid_W.y() < 0.f) red_cup = id;
+  }
+  ASSERT_NE(red_cup, 0);
+  // A second visit from other places: the red cup is gone, the blue one still there.
+  std::vector<SceneBox> without_red = {boxes_[0], boxes_[2], boxes_[3]};
+  for (const Eigen::Vector3d& eye : std::vector<Eigen::Vector3d>{
+           {-1.05, -0.35, 1.25}, {-0.9, 0.35, 1.3}, {-1.1, 0.1, 1.4}}) {
+    const Eigen::Isometry3d pose = testing::LookAt(eye, Eigen::Vector3d(0, 0.1, 0.7));
+    AddKeyframeOutcome outcome;
+    const std::vector<Detection> blue = {{testing::ProjectBox(boxes_[2], pose, K_), kCup, 0.5f}};
+    ASSERT_TRUE(server_->AddKeyframe(testing::RenderFrame(without_red, K_, pose, "revisit"), blue,
+                                     &outcome)
+                    .ok());
+  }
+  const auto snapshot = server_->Snapshot();
+  ASSERT_EQ(snapshot->tombstones.size(), 1u);
+  const ObjectId removed = snapshot->tombstones.begin()->first;
+  EXPECT_EQ(removed, red_cup);
+  const json map = GetJson("/api/map");
+  ASSERT_EQ(map["tombstones"].size(), 1u);
+  EXPECT_EQ(map["tombstones"][0]["id"], removed);
+  EXPECT_EQ(map["tombstones"][0]["state"], "removed");
+  EXPECT_EQ(map["tombstones"][0]["removed"]["keyframe"], 5);
+  for (const json& object : map["objects"]) EXPECT_NE(object["id"], removed);
+  ASSERT_EQ(map["changes"].size(), 1u);
+  EXPECT_EQ(map["changes"][0]["kind"], "removed");
+  EXPECT_EQ(map["changes"][0]["id"], removed);
+  EXPECT_EQ(map["sessions"], json::array({1}));
+  // Its details are still there, for a click on its ghost.
+  const json detail = GetJson("/api/objects/" + std::to_string(removed));
+  EXPECT_EQ(detail["state"], "removed");
+}
+
 TEST_F(ViewerScene, AnObjectComesWithScoresSightingsAModelAndCrops) {
   StartLiveViewer();
   const auto snapshot = server_->Snapshot();
