@@ -181,6 +181,32 @@ TEST_F(ObjectChangesTest, AMovedCupKeepsItsIdAndBothPlaces) {
   EXPECT_TRUE(found);
 }
 
+TEST_F(ObjectChangesTest, LookAlikesAreNoGuessedMoveWhenAmbiguityIsChecked) {
+  // Two blue cups of one make; both go, one blue cup appears elsewhere: which of them it is, if
+  // either, nothing tells. Two removals and an addition, no move.
+  SceneBox blue_one = kCupOne;
+  blue_one.rgb = kCupTwo.rgb;
+  MapperConfig undecided;
+  undecided.changes.move_ambiguity_colour_margin = 15.f;
+  Mapper mapper{undecided};
+  MapVisit(&mapper, kFirstVisit, {blue_one, kCupTwo}, {blue_one, kCupTwo});
+  MapVisit(&mapper, kSecondVisit, {kCupTwoMoved}, {kCupTwoMoved});
+  std::map<ObjectChange::Kind, int> kinds;
+  for (const ObjectChange& change : ChangeList(mapper.Changes())) ++kinds[change.kind];
+  EXPECT_EQ(kinds[ObjectChange::Kind::kRemoved], 2);
+  EXPECT_EQ(kinds[ObjectChange::Kind::kAdded], 1);
+  EXPECT_EQ(kinds[ObjectChange::Kind::kMoved], 0);
+
+  // With the ambiguity check off (the default), the best fit is taken: one move, one removal.
+  Mapper guesser{config_};
+  MapVisit(&guesser, kFirstVisit, {blue_one, kCupTwo}, {blue_one, kCupTwo});
+  MapVisit(&guesser, kSecondVisit, {kCupTwoMoved}, {kCupTwoMoved});
+  kinds.clear();
+  for (const ObjectChange& change : ChangeList(guesser.Changes())) ++kinds[change.kind];
+  EXPECT_EQ(kinds[ObjectChange::Kind::kMoved], 1);
+  EXPECT_EQ(kinds[ObjectChange::Kind::kRemoved], 1);
+}
+
 TEST_F(ObjectChangesTest, ACupPutWhereTheTableWasSeenEmptyIsAdded) {
   Mapper mapper{config_};
   MapVisit(&mapper, kFirstVisit, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});

@@ -107,6 +107,7 @@ void VisitMapModel(MapperConfig* m, Visitor& v) {
   v("max_move_size_ratio", &c.max_move_size_ratio);
   v("min_move_distance_m", &c.min_move_distance_m);
   v("max_move_colour_distance", &c.max_move_colour_distance);
+  v("move_ambiguity_colour_margin", &c.move_ambiguity_colour_margin);
   UnknownObjectConfig& u = m->unknown_objects;
   v.Section("unknown_objects");
   v("enabled", &u.enabled);

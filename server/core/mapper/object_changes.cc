@@ -224,32 +224,62 @@ ObjectChanges DetectChanges(const ChangeInputs& inputs, const ChangeConfig& conf
   std::sort(removed.begin(), removed.end(), [](const PlaceEvidence* a, const PlaceEvidence* b) {
     return std::tie(a->seen_empty_at, a->object->id) < std::tie(b->seen_empty_at, b->object->id);
   });
+  // Whether `arrival` could be `gone` moved: later, one label, size, far enough, colour.
+  auto could_be_move = [&](const PlaceEvidence& gone, const PlaceEvidence& arrival) {
+    if (!arrival.counts || &arrival == &gone) return false;
+    if (arrival.first_seen <= gone.last_seen || arrival.object->Label() != gone.object->Label()) {
+      return false;
+    }
+    if (SizeRatio(*gone.object, *arrival.object) > config.max_move_size_ratio) return false;
+    if ((arrival.object->centroid_W - gone.object->centroid_W).norm() <
+        config.min_move_distance_m) {
+      return false;
+    }
+    return config.max_move_colour_distance <= 0.f ||
+           (colour_of(*arrival.object) - colour_of(*gone.object)).norm() <=
+               config.max_move_colour_distance;
+  };
+  auto surety_of = [](const PlaceEvidence& arrival) {
+    return arrival.seen_empty_before ? 0 : arrival.judged_before ? 2 : 1;
+  };
+  auto colour_gap = [&](const PlaceEvidence& a, const PlaceEvidence& b) {
+    return (colour_of(*a.object) - colour_of(*b.object)).norm();
+  };
   for (const PlaceEvidence* gone : removed) {
-    const int label = gone->object->Label();
     const PlaceEvidence* best = nullptr;
     std::tuple<int, float, KeyframeId> best_key;
     for (const auto& [id, arrival] : places) {
-      if (!arrival.counts || previous.count(id) > 0 || id == gone->object->id) continue;
-      if (arrival.first_seen <= gone->last_seen || arrival.object->Label() != label) continue;
-      const float ratio = SizeRatio(*gone->object, *arrival.object);
-      if (ratio > config.max_move_size_ratio) continue;
-      if ((arrival.object->centroid_W - gone->object->centroid_W).norm() <
-          config.min_move_distance_m) {
-        continue;
-      }
-      if (config.max_move_colour_distance > 0.f &&
-          (colour_of(*arrival.object) - colour_of(*gone->object)).norm() >
-              config.max_move_colour_distance) {
-        continue;
-      }
-      const int surety = arrival.seen_empty_before ? 0 : arrival.judged_before ? 2 : 1;
-      const std::tuple<int, float, KeyframeId> key{surety, ratio, arrival.first_seen};
+      if (previous.count(id) > 0 || !could_be_move(*gone, arrival)) continue;
+      const std::tuple<int, float, KeyframeId> key{
+          surety_of(arrival), SizeRatio(*gone->object, *arrival.object), arrival.first_seen};
       if (best == nullptr || key < best_key) {
         best = &arrival;
         best_key = key;
       }
     }
     if (best == nullptr) continue;
+    if (config.move_ambiguity_colour_margin > 0.f) {
+      // Look-alikes (two mugs of one make): another arrival as sure that fits this removal as
+      // well, or another removal that fits this arrival as well, leaves the move undecided. Two
+      // changes reported as they were seen (removed, added) are wrong less often than a guess.
+      const float best_gap = colour_gap(*gone, *best);
+      const float margin = config.move_ambiguity_colour_margin;
+      bool ambiguous = false;
+      for (const auto& [id, arrival] : places) {
+        if (&arrival == best || previous.count(id) > 0 || !could_be_move(*gone, arrival)) continue;
+        if (surety_of(arrival) == std::get<0>(best_key) &&
+            colour_gap(*gone, arrival) <= best_gap + margin) {
+          ambiguous = true;
+        }
+      }
+      for (const PlaceEvidence* other : removed) {
+        if (other == gone || next.count(other->object->id) > 0) continue;
+        if (could_be_move(*other, *best) && colour_gap(*other, *best) <= best_gap + margin) {
+          ambiguous = true;
+        }
+      }
+      if (ambiguous) continue;
+    }
     next[gone->object->id] = best->object->id;
     previous[best->object->id] = gone->object->id;
   }
