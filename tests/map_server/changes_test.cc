@@ -4,6 +4,8 @@
 // typed changes; a restart (also after kill -9: the store is all there is) lists the same changes.
 
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cstdio>
@@ -202,6 +204,101 @@ TEST_F(MapServerChanges, ARemovedCupIsATombstoneAndAMovedOneKeepsItsId) {
   std::shared_ptr<const ObjectView> tombstone;
   ASSERT_TRUE(restarted->GetObject(cup_one, &tombstone).ok());
   EXPECT_EQ(tombstone->state, ObjectState::kRemoved);
+}
+
+// kill -9 during the second visit, at several moments: the reopened map holds exactly the
+// acknowledged keyframes, both sessions, and the changes (tombstone included) that a map of those
+// keyframes has: nothing acknowledged is lost, nothing is half there.
+TEST_F(MapServerChanges, KillNineDuringTheSecondVisitLosesNoChange) {
+  // What the map says after each keyframe: a clean run in a database of its own.
+  struct Expected {
+    std::vector<std::pair<ObjectChange::Kind, ObjectId>> changes;
+  };
+  std::vector<Expected> after;  // after[k]: after k keyframes
+  const std::string reference_path = db_path_ + ".reference";
+  RemoveDatabase(reference_path);
+  auto list = [](const MapServer& server) {
+    std::vector<std::pair<ObjectChange::Kind, ObjectId>> listed;
+    for (const MapObjectChange& change : Changes(server)) {
+      listed.emplace_back(change.change.kind, change.change.id);
+    }
+    return listed;
+  };
+  {
+    std::string why;
+    auto reference = MapServer::Open(config_, reference_path, nullptr, &why);
+    ASSERT_TRUE(reference) << why;
+    after.push_back({});
+    for (std::size_t i = 0; i < kFirstEyes.size(); ++i) {
+      MapVisit(reference.get(), {kFirstEyes[i]}, {kCupOne, kCupTwo});
+      after.push_back({list(*reference)});
+    }
+    ASSERT_TRUE(reference->StartSession("second visit", nullptr).ok());
+    for (std::size_t i = 0; i < kSecondEyes.size(); ++i) {
+      MapVisit(reference.get(), {kSecondEyes[i]}, {kCupTwoMoved});
+      after.push_back({list(*reference)});
+    }
+  }
+  RemoveDatabase(reference_path);
+  ASSERT_EQ(after.back().changes.size(), 2u);  // cup one removed, cup two moved
+
+  // Killed after one, two and all three keyframes of the second visit: before any change is
+  // known, while the evidence builds up, and after both changes are listed.
+  bool saw_changes = false;
+  for (int kill_after = 1; kill_after <= 3; ++kill_after) {
+    const int trial = kill_after;
+    RemoveDatabase(db_path_);
+    // The child maps both visits and writes a byte for every acknowledged keyframe; the parent
+    // kills it once `kill_after` of the second visit's keyframes are acknowledged.
+    int acks[2];
+    ASSERT_EQ(pipe(acks), 0);
+    const pid_t child = fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+      close(acks[0]);
+      std::string why;
+      auto server = MapServer::Open(config_, db_path_, nullptr, &why);
+      if (!server) _exit(3);
+      auto add = [&](const Eigen::Vector3d& eye, const std::vector<SceneBox>& cups) {
+        MapVisit(server.get(), {eye}, cups);
+        const char ack = 1;
+        if (write(acks[1], &ack, 1) != 1) _exit(4);
+      };
+      for (const Eigen::Vector3d& eye : kFirstEyes) add(eye, {kCupOne, kCupTwo});
+      if (!server->StartSession("second visit", nullptr).ok()) _exit(5);
+      for (const Eigen::Vector3d& eye : kSecondEyes) add(eye, {kCupTwoMoved});
+      for (;;) pause();  // killed here at the latest
+    }
+    close(acks[1]);
+    const int first_visit = static_cast<int>(kFirstEyes.size());
+    int acknowledged = 0;
+    char ack = 0;
+    while (acknowledged < first_visit + kill_after && read(acks[0], &ack, 1) == 1) ++acknowledged;
+    kill(child, SIGKILL);
+    int status = 0;
+    waitpid(child, &status, 0);
+    while (read(acks[0], &ack, 1) == 1) ++acknowledged;  // acknowledged before the kill landed
+    close(acks[0]);
+    ASSERT_TRUE(WIFSIGNALED(status)) << "the child ended by itself, status " << status;
+
+    auto reopened = OpenServer();
+    ASSERT_TRUE(reopened);
+    const std::size_t held = reopened->Snapshot()->num_keyframes;
+    // Every acknowledged keyframe is there; one more may be, committed as the kill came.
+    EXPECT_GE(held, static_cast<std::size_t>(acknowledged)) << "trial " << trial;
+    EXPECT_LE(held, static_cast<std::size_t>(acknowledged) + 1) << "trial " << trial;
+    ASSERT_LT(held, after.size());
+    EXPECT_EQ(list(*reopened), after[held].changes)
+        << "trial " << trial << ", " << held << " keyframes";
+    saw_changes = saw_changes || !after[held].changes.empty();
+    SessionId current = 0;
+    std::vector<SessionSummary> sessions;
+    ASSERT_TRUE(reopened->ListSessions(&sessions, &current).ok());
+    std::size_t stored = 0;
+    for (const SessionSummary& session : sessions) stored += session.keyframes > 0 ? 1 : 0;
+    EXPECT_EQ(stored, held > kFirstEyes.size() ? 2u : 1u) << "trial " << trial;
+  }
+  EXPECT_TRUE(saw_changes) << "no kill came after a change was known";
 }
 
 }  // namespace
