@@ -106,16 +106,8 @@ std::vector<MapObjectChange> SnapshotBuilder::ListChanges(const ObjectChanges& c
     const auto key = std::make_tuple(static_cast<int>(change.kind), change.id, change.keyframe_id);
     const auto known = change_versions_.find(key);
     entry.version = known != change_versions_.end() ? known->second : version;
-    if (change.kind == ObjectChange::Kind::kMoved) {
-      const auto history = changes.histories.find(change.id);
-      if (history != changes.histories.end()) {
-        for (std::size_t i = 1; i < history->second.places.size(); ++i) {
-          if (history->second.places[i].first_seen <= change.keyframe_id) {
-            entry.from_last_seen = Seen(history->second.places[i - 1].last_seen);
-          }
-        }
-      }
-    }
+    if (change.kind == ObjectChange::Kind::kMoved)
+      entry.from_last_seen = Seen(change.from_last_seen);
     versions[key] = entry.version;
     if (known == change_versions_.end()) diff->object_changes.push_back(entry);
   }
@@ -204,10 +196,8 @@ std::shared_ptr<const MapSnapshot> SnapshotBuilder::Build(const Mapper& mapper,
   tombstones_ = snapshot->tombstones;
   snapshot->changes = ListChanges(changes, version, &local);
 
-  snapshot->inventory = InventoryOf(confirmed_objects, mapper.config().inventory.count_unknown);
-  for (InventoryEntry& entry : snapshot->inventory) {
-    for (ObjectId& id : entry.objects) id = changes.PublishedId(id);
-  }
+  snapshot->inventory =
+      InventoryOf(confirmed_objects, mapper.config().inventory.count_unknown, &changes);
   snapshot->class_changed_version.assign(class_changed_version_.begin(),
                                          class_changed_version_.end());
   if (diff != nullptr) *diff = std::move(local);

@@ -59,12 +59,12 @@ nlohmann::json PlaceJson(const ObjectPlace& place) {
           {"last_seen_keyframe", place.last_seen}, {"seen_empty_keyframe", place.seen_empty_at}};
 }
 
-}  // namespace
-
-std::string ObjectsJson(const Mapper& mapper) {
-  const ObjectChanges changes = mapper.Changes();
+// The objects.json document of `mapper`, whose changes and confirmed objects are given (both
+// project every object into every keyframe: computed once per write).
+std::string ObjectsJsonOf(const Mapper& mapper, const ObjectChanges& changes,
+                          const std::vector<const MapObject*>& confirmed_objects) {
   std::set<ObjectId> confirmed;
-  for (const MapObject* object : mapper.ConfirmedObjects(changes)) confirmed.insert(object->id);
+  for (const MapObject* object : confirmed_objects) confirmed.insert(object->id);
   nlohmann::json objects = nlohmann::json::array();
   for (const auto& [id, object] : mapper.objects().objects()) {
     if (changes.gone.count(id) > 0) continue;
@@ -98,13 +98,11 @@ std::string ObjectsJson(const Mapper& mapper) {
   }
   nlohmann::json inventory = nlohmann::json::array();
   for (const InventoryEntry& entry :
-       InventoryOf(mapper.ConfirmedObjects(changes), mapper.config().inventory.count_unknown)) {
-    std::vector<ObjectId> ids;
-    for (ObjectId id : entry.objects) ids.push_back(changes.PublishedId(id));
+       InventoryOf(confirmed_objects, mapper.config().inventory.count_unknown, &changes)) {
     inventory.push_back({{"class", std::string(ObjectClassName(entry.class_id))},
                          {"count", entry.count},
                          {"mean_confidence", entry.mean_confidence},
-                         {"objects", ids}});
+                         {"objects", entry.objects}});
   }
   return nlohmann::json{{"keyframes", mapper.num_keyframes()},
                         {"inventory", inventory},
@@ -113,9 +111,9 @@ std::string ObjectsJson(const Mapper& mapper) {
       .dump(2);
 }
 
-std::string ChangesJson(const Mapper& mapper, const KeyframeWhenLookup& when) {
+std::string ChangesJsonOf(const ObjectChanges& changes, const KeyframeWhenLookup& when) {
   nlohmann::json list = nlohmann::json::array();
-  for (const ObjectChange& change : ChangeList(mapper.Changes())) {
+  for (const ObjectChange& change : ChangeList(changes)) {
     nlohmann::json json = {{"kind", ChangeKindName(change.kind)},
                            {"object_id", change.id},
                            {"class", std::string(ObjectClassName(change.class_id))},
@@ -134,6 +132,28 @@ std::string ChangesJson(const Mapper& mapper, const KeyframeWhenLookup& when) {
   return nlohmann::json{{"format", "objmap-map-changes-1"}, {"changes", list}}.dump(2);
 }
 
+// Writes `text` and a newline to `path`; false with the path named when it cannot.
+bool WriteTextFile(const std::string& path, const std::string& text, std::string* why) {
+  std::ofstream file(path);
+  file << text << "\n";
+  if (!file) {
+    *why = path + ": write failed";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+std::string ObjectsJson(const Mapper& mapper) {
+  const ObjectChanges changes = mapper.Changes();
+  return ObjectsJsonOf(mapper, changes, mapper.ConfirmedObjects(changes));
+}
+
+std::string ChangesJson(const Mapper& mapper, const KeyframeWhenLookup& when) {
+  return ChangesJsonOf(mapper.Changes(), when);
+}
+
 bool WriteMapOutputs(const Mapper& mapper, const std::string& out_dir, std::string* why,
                      const KeyframeWhenLookup& when) {
   namespace fs = std::filesystem;
@@ -144,18 +164,10 @@ bool WriteMapOutputs(const Mapper& mapper, const std::string& out_dir, std::stri
     return false;
   }
   if (!mapper.occupancy().WriteBinary(out_dir + "/map.bt", why)) return false;
-  const std::string json_path = out_dir + "/objects.json";
-  std::ofstream json(json_path);
-  json << ObjectsJson(mapper) << "\n";
-  if (!json) {
-    *why = json_path + ": write failed";
-    return false;
-  }
-  const std::string changes_path = out_dir + "/changes.json";
-  std::ofstream changes(changes_path);
-  changes << ChangesJson(mapper, when) << "\n";
-  if (!changes) {
-    *why = changes_path + ": write failed";
+  const ObjectChanges changes = mapper.Changes();
+  const std::vector<const MapObject*> confirmed = mapper.ConfirmedObjects(changes);
+  if (!WriteTextFile(out_dir + "/objects.json", ObjectsJsonOf(mapper, changes, confirmed), why) ||
+      !WriteTextFile(out_dir + "/changes.json", ChangesJsonOf(changes, when), why)) {
     return false;
   }
   // A folder written again (a run added to a map folder) keeps no model of an object that has
@@ -163,12 +175,10 @@ bool WriteMapOutputs(const Mapper& mapper, const std::string& out_dir, std::stri
   for (const fs::directory_entry& entry : fs::directory_iterator(fs::path(out_dir) / "objects")) {
     if (entry.path().extension() == ".ply") fs::remove(entry.path(), error);
   }
-  const ObjectChanges object_changes = mapper.Changes();
-  for (const MapObject* object : mapper.ConfirmedObjects(object_changes)) {
+  for (const MapObject* object : confirmed) {
     const ColoredPoints model = mapper.objects().ModelPoints(*object);
-    const std::string path =
-        out_dir + "/objects/" +
-        ObjectModelFileName(object_changes.PublishedId(object->id), object->Label());
+    const std::string path = out_dir + "/objects/" +
+                             ObjectModelFileName(changes.PublishedId(object->id), object->Label());
     if (!WritePly(path, model.points, model.colors, why)) return false;
   }
   return true;

@@ -731,7 +731,7 @@ std::vector<const MapObject*> Mapper::ConfirmedObjects(const ObjectChanges& chan
 }
 
 std::vector<InventoryEntry> InventoryOf(const std::vector<const MapObject*>& objects,
-                                        bool count_unknown) {
+                                        bool count_unknown, const ObjectChanges* changes) {
   std::map<int, InventoryEntry> by_class;
   for (const MapObject* object : objects) {
     if (!count_unknown && object->Label() == kUnknownClassId) continue;
@@ -739,7 +739,7 @@ std::vector<InventoryEntry> InventoryOf(const std::vector<const MapObject*>& obj
     entry.class_id = object->Label();
     ++entry.count;
     entry.mean_confidence += object->Confidence();
-    entry.objects.push_back(object->id);
+    entry.objects.push_back(changes != nullptr ? changes->PublishedId(object->id) : object->id);
   }
   std::vector<InventoryEntry> inventory;
   for (auto& [class_id, entry] : by_class) {
@@ -754,12 +754,7 @@ std::vector<InventoryEntry> InventoryOf(const std::vector<const MapObject*>& obj
 
 std::vector<InventoryEntry> Mapper::Inventory() const {
   const ObjectChanges changes = Changes();
-  std::vector<InventoryEntry> inventory =
-      InventoryOf(ConfirmedObjects(changes), impl_->config.inventory.count_unknown);
-  for (InventoryEntry& entry : inventory) {
-    for (ObjectId& id : entry.objects) id = changes.PublishedId(id);
-  }
-  return inventory;
+  return InventoryOf(ConfirmedObjects(changes), impl_->config.inventory.count_unknown, &changes);
 }
 
 const ObjectMap& Mapper::objects() const { return impl_->objects; }

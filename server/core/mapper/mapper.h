@@ -181,9 +181,11 @@ struct InventoryEntry {
 };
 
 /// Groups objects by label: count, mean confidence and ids per class, most frequent first.
-/// Unknown objects (kUnknownClassId) are left out unless `count_unknown`.
+/// Unknown objects (kUnknownClassId) are left out unless `count_unknown`. With `changes`, each
+/// object is listed under the id it is published under (a moved object's first id).
 [[nodiscard]] std::vector<InventoryEntry> InventoryOf(const std::vector<const MapObject*>& objects,
-                                                      bool count_unknown = false);
+                                                      bool count_unknown = false,
+                                                      const ObjectChanges* changes = nullptr);
 
 /// What a pose update did.
 struct PoseUpdateReport {

@@ -163,6 +163,7 @@ std::vector<ObjectChange> ChangeList(const ObjectChanges& changes) {
       ObjectChange* moved =
           change_at(ObjectChange::Kind::kMoved, std::max(from.seen_empty_at, to.first_seen), to);
       moved->from_W = from.centroid_W;
+      moved->from_last_seen = from.last_seen;
     }
     if (history.state == ObjectState::kRemoved) {
       const ObjectPlace& last = history.places.back();

@@ -79,8 +79,9 @@ struct ObjectChange {
   Eigen::Vector3f centroid_W = Eigen::Vector3f::Zero();
   Eigen::Vector3f min_W = Eigen::Vector3f::Zero();
   Eigen::Vector3f max_W = Eigen::Vector3f::Zero();
-  /// Moved: where it was before.
+  /// Moved: where it was before, and its last sighting there.
   Eigen::Vector3f from_W = Eigen::Vector3f::Zero();
+  KeyframeId from_last_seen = 0;
 };
 
 [[nodiscard]] const char* ChangeKindName(ObjectChange::Kind kind);
