@@ -249,13 +249,13 @@ bool ParseBool(const std::string& text, const std::string& name) {
 std::shared_ptr<const ObjectView> FindObject(const MapSnapshot& snapshot,
                                              const std::string& id_text) {
   const ObjectId id = ParseInteger(id_text, "object id", 1, INT64_MAX);
-  auto it = snapshot.objects.find(id);
-  if (it == snapshot.objects.end()) it = snapshot.tombstones.find(id);  // removed: its ghost
-  if (it == snapshot.objects.end() || it == snapshot.tombstones.end()) {
+  // A removed object is found too: its ghost can be clicked.
+  std::shared_ptr<const ObjectView> found = snapshot.ObjectOrTombstone(id);
+  if (!found) {
     throw ApiError{404, "object " + id_text + " is not in the map (version " +
                             std::to_string(snapshot.version) + ")"};
   }
-  return it->second;
+  return found;
 }
 
 std::string ModelBytes(const ColoredPoints& model) {

@@ -185,6 +185,8 @@ struct MapSnapshot {
   /// Removed objects, by id: out of the inventory, object queries, IsFree and CastRay; kept
   /// for the change queries and GetObject.
   std::map<ObjectId, std::shared_ptr<const ObjectView>> tombstones;
+  /// The present object with this id or, failing that, its tombstone; nullptr when neither.
+  [[nodiscard]] std::shared_ptr<const ObjectView> ObjectOrTombstone(ObjectId id) const;
   /// Every change of the map's objects, ordered by keyframe (ChangeList).
   std::vector<MapObjectChange> changes;
   std::vector<InventoryEntry> inventory;  ///< confirmed objects per class, most frequent first

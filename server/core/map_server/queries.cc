@@ -105,16 +105,16 @@ ServiceStatus MapServer::QueryObjects(const ObjectFilter& filter,
   return ServiceStatus::Ok();
 }
 
+std::shared_ptr<const ObjectView> MapSnapshot::ObjectOrTombstone(ObjectId id) const {
+  if (const auto it = objects.find(id); it != objects.end()) return it->second;
+  if (const auto it = tombstones.find(id); it != tombstones.end()) return it->second;
+  return nullptr;
+}
+
 ServiceStatus MapServer::GetObject(ObjectId id, std::shared_ptr<const ObjectView>* object) const {
-  const auto snapshot = impl_->Current();
-  auto it = snapshot->objects.find(id);
-  if (it == snapshot->objects.end()) {
-    it = snapshot->tombstones.find(id);
-    if (it == snapshot->tombstones.end()) {
-      return ServiceStatus::NotFound("unknown object id " + std::to_string(id));
-    }
-  }
-  *object = it->second;
+  std::shared_ptr<const ObjectView> found = impl_->Current()->ObjectOrTombstone(id);
+  if (!found) return ServiceStatus::NotFound("unknown object id " + std::to_string(id));
+  *object = std::move(found);
   return ServiceStatus::Ok();
 }
 
@@ -254,8 +254,9 @@ ServiceStatus MapServer::CastRay(const Eigen::Vector3d& origin_W,
                                  const Eigen::Vector3d& direction_W, double max_range_m,
                                  bool unknown_stops, RayHit* hit, ObjectId* object_hit,
                                  std::uint64_t* version) const {
-  if (!IsFiniteVector(origin_W))
+  if (!IsFiniteVector(origin_W)) {
     return ServiceStatus::Invalid("origin: coordinates must be finite");
+  }
   if (!IsFiniteVector(direction_W) || direction_W.norm() < 1e-9) {
     return ServiceStatus::Invalid("direction must be finite and non-zero");
   }
