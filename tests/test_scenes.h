@@ -134,3 +134,24 @@ inline Eigen::Isometry3d LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3
 }
 
 }  // namespace objmap::testing
+
+namespace objmap::testing::table_visits {
+
+// A table with two cups before a wall, visited twice from three places each (the change tests'
+// scene): every place of a visit is an independent view of the others (ViewGroupingConfig), and
+// the second visit's cameras stand elsewhere than the first's.
+inline const SceneBox kTable{{-0.6, -0.8, 0.60}, {0.6, 0.8, 0.70}, {150, 100, 60}};
+inline const SceneBox kWall{{1.5, -2.0, 0.0}, {1.6, 2.0, 2.5}, {220, 220, 220}};
+inline const SceneBox kCupOne{{-0.05, -0.25, 0.70}, {0.05, -0.15, 0.82}, {200, 30, 30}};  // red
+inline const SceneBox kCupTwo{{-0.05, 0.15, 0.70}, {0.05, 0.25, 0.82}, {30, 30, 200}};    // blue
+// Where cup two stands after it was moved: on the table, in view of both visits, 30 cm and
+// more from anything else.
+inline const SceneBox kCupTwoMoved{{0.20, 0.45, 0.70}, {0.30, 0.55, 0.82}, {30, 30, 200}};
+inline const std::vector<Eigen::Vector3d> kFirstEyes = {
+    {-1.0, 0.0, 1.3}, {-1.0, 0.25, 1.3}, {-0.95, -0.25, 1.35}};
+inline const std::vector<Eigen::Vector3d> kSecondEyes = {
+    {-1.05, -0.35, 1.25}, {-0.9, 0.35, 1.3}, {-1.1, 0.1, 1.4}};
+// Where every camera of both visits looks.
+inline const Eigen::Vector3d kTarget{0.0, 0.1, 0.7};
+
+}  // namespace objmap::testing::table_visits

@@ -181,9 +181,8 @@ TEST_F(ViewerScene, ARemovedCupIsAGhostWithItsChange) {
   ASSERT_NE(red_cup, 0);
   // A second visit from other places: the red cup is gone, the blue one still there.
   std::vector<SceneBox> without_red = {boxes_[0], boxes_[2], boxes_[3]};
-  for (const Eigen::Vector3d& eye : std::vector<Eigen::Vector3d>{
-           {-1.05, -0.35, 1.25}, {-0.9, 0.35, 1.3}, {-1.1, 0.1, 1.4}}) {
-    const Eigen::Isometry3d pose = testing::LookAt(eye, Eigen::Vector3d(0, 0.1, 0.7));
+  for (const Eigen::Vector3d& eye : testing::table_visits::kSecondEyes) {
+    const Eigen::Isometry3d pose = testing::LookAt(eye, testing::table_visits::kTarget);
     AddKeyframeOutcome outcome;
     const std::vector<Detection> blue = {{testing::ProjectBox(boxes_[2], pose, K_), kCup, 0.5f}};
     ASSERT_TRUE(server_->AddKeyframe(testing::RenderFrame(without_red, K_, pose, "revisit"), blue,

@@ -20,16 +20,7 @@ namespace {
 using testing::SceneBox;
 
 const int kCup = CocoClassId("cup");
-const SceneBox kTable{{-0.6, -0.8, 0.60}, {0.6, 0.8, 0.70}, {150, 100, 60}};
-const SceneBox kWall{{1.5, -2.0, 0.0}, {1.6, 2.0, 2.5}, {220, 220, 220}};
-const SceneBox kCupOne{{-0.05, -0.25, 0.70}, {0.05, -0.15, 0.82}, {200, 30, 30}};
-const SceneBox kCupTwo{{-0.05, 0.15, 0.70}, {0.05, 0.25, 0.82}, {30, 30, 200}};
-const SceneBox kCupTwoMoved{{0.20, 0.45, 0.70}, {0.30, 0.55, 0.82}, {30, 30, 200}};
-
-const std::vector<Eigen::Vector3d> kFirstEyes = {
-    {-1.0, 0.0, 1.3}, {-1.0, 0.25, 1.3}, {-0.95, -0.25, 1.35}};
-const std::vector<Eigen::Vector3d> kSecondEyes = {
-    {-1.05, -0.35, 1.25}, {-0.9, 0.35, 1.3}, {-1.1, 0.1, 1.4}};
+using namespace testing::table_visits;  // kTable, kWall, the cups, both visits' eyes
 
 std::string TempDatabase() {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
@@ -59,7 +50,7 @@ class MapServerChanges : public ::testing::Test {
     std::vector<SceneBox> boxes = {kTable, kWall};
     boxes.insert(boxes.end(), cups.begin(), cups.end());
     for (const Eigen::Vector3d& eye : eyes) {
-      const Eigen::Isometry3d T_W_C = testing::LookAt(eye, Eigen::Vector3d(0, 0.1, 0.7));
+      const Eigen::Isometry3d T_W_C = testing::LookAt(eye, kTarget);
       std::vector<Detection> detections;
       for (const SceneBox& cup : cups) {
         detections.push_back({testing::ProjectBox(cup, T_W_C, K_), kCup, 0.6f});

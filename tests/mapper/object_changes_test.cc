@@ -16,32 +16,22 @@ using testing::SceneBox;
 
 const int kCup = CocoClassId("cup");
 
-const SceneBox kTable{{-0.6, -0.8, 0.60}, {0.6, 0.8, 0.70}, {150, 100, 60}};
-const SceneBox kWall{{1.5, -2.0, 0.0}, {1.6, 2.0, 2.5}, {220, 220, 220}};
-const SceneBox kCupOne{{-0.05, -0.25, 0.70}, {0.05, -0.15, 0.82}, {200, 30, 30}};
-const SceneBox kCupTwo{{-0.05, 0.15, 0.70}, {0.05, 0.25, 0.82}, {30, 30, 200}};
-// Where cup two stands after it was moved, and where a third cup is put down: both on the table,
-// in view of both visits, 30 cm and more from anything else.
-const SceneBox kCupTwoMoved{{0.20, 0.45, 0.70}, {0.30, 0.55, 0.82}, {30, 30, 200}};
-const SceneBox kCupThree{{-0.35, 0.45, 0.70}, {-0.25, 0.55, 0.82}, {30, 160, 30}};
+using namespace testing::table_visits;  // kTable, kWall, the cups, both visits' eyes
 
-// A visit: camera positions looking at the table, each an independent view of the others.
-struct Visit {
-  std::vector<Eigen::Vector3d> eyes;
-};
-const Visit kFirstVisit{{{-1.0, 0.0, 1.3}, {-1.0, 0.25, 1.3}, {-0.95, -0.25, 1.35}}};
-const Visit kSecondVisit{{{-1.05, -0.35, 1.25}, {-0.9, 0.35, 1.3}, {-1.1, 0.1, 1.4}}};
+// Where a third cup is put down: on the table, in view of both visits, 30 cm and more from
+// anything else.
+const SceneBox kCupThree{{-0.35, 0.45, 0.70}, {-0.25, 0.55, 0.82}, {30, 160, 30}};
 
 class ObjectChangesTest : public ::testing::Test {
  protected:
-  // Maps every eye of `visit` over `scene` (table, wall, and the cups in `cups`); the cups in
+  // Maps every eye of a visit over the table, the wall and the cups in `cups`; the cups in
   // `detected` (a subset of `cups`) are detected in every view.
-  void MapVisit(Mapper* mapper, const Visit& visit, const std::vector<SceneBox>& cups,
-                const std::vector<SceneBox>& detected) const {
+  void MapVisit(Mapper* mapper, const std::vector<Eigen::Vector3d>& eyes,
+                const std::vector<SceneBox>& cups, const std::vector<SceneBox>& detected) const {
     std::vector<SceneBox> boxes = {kTable, kWall};
     boxes.insert(boxes.end(), cups.begin(), cups.end());
-    for (const Eigen::Vector3d& eye : visit.eyes) {
-      const Eigen::Isometry3d T_W_C = testing::LookAt(eye, Eigen::Vector3d(0, 0.1, 0.7));
+    for (const Eigen::Vector3d& eye : eyes) {
+      const Eigen::Isometry3d T_W_C = testing::LookAt(eye, kTarget);
       std::vector<Detection> detections;
       for (const SceneBox& cup : detected) {
         detections.push_back({testing::ProjectBox(cup, T_W_C, K_), kCup, 0.6f});
@@ -82,8 +72,8 @@ class ObjectChangesTest : public ::testing::Test {
 
 TEST_F(ObjectChangesTest, OneVisitHasNoChanges) {
   Mapper mapper{config_};
-  MapVisit(&mapper, kFirstVisit, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});
-  MapVisit(&mapper, kSecondVisit, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});
+  MapVisit(&mapper, kFirstEyes, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});
+  MapVisit(&mapper, kSecondEyes, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});
   const ObjectChanges changes = mapper.Changes();
   EXPECT_TRUE(changes.histories.empty());
   EXPECT_TRUE(changes.gone.empty());
@@ -92,11 +82,11 @@ TEST_F(ObjectChangesTest, OneVisitHasNoChanges) {
 
 TEST_F(ObjectChangesTest, ACupTakenAwayIsRemovedAndLeavesTheInventory) {
   Mapper mapper{config_};
-  MapVisit(&mapper, kFirstVisit, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});
+  MapVisit(&mapper, kFirstEyes, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});
   const ObjectId cup_two = ObjectAt(mapper, kCupTwo);
   ASSERT_NE(cup_two, 0);
   ASSERT_TRUE(IsConfirmed(mapper, cup_two));
-  MapVisit(&mapper, kSecondVisit, {kCupOne}, {kCupOne});
+  MapVisit(&mapper, kSecondEyes, {kCupOne}, {kCupOne});
 
   const ObjectChanges changes = mapper.Changes();
   ASSERT_EQ(changes.histories.count(cup_two), 1u);
@@ -126,10 +116,10 @@ TEST_F(ObjectChangesTest, ACupTakenAwayIsRemovedAndLeavesTheInventory) {
 
 TEST_F(ObjectChangesTest, DetectorMissesAloneRemoveNothing) {
   Mapper mapper{config_};
-  MapVisit(&mapper, kFirstVisit, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});
+  MapVisit(&mapper, kFirstEyes, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});
   const ObjectId cup_two = ObjectAt(mapper, kCupTwo);
   // Cup two is still there; the detector just does not find it in the second visit.
-  MapVisit(&mapper, kSecondVisit, {kCupOne, kCupTwo}, {kCupOne});
+  MapVisit(&mapper, kSecondEyes, {kCupOne, kCupTwo}, {kCupOne});
   const ObjectChanges changes = mapper.Changes();
   EXPECT_EQ(changes.histories.count(cup_two), 0u);
   EXPECT_EQ(changes.gone.count(cup_two), 0u);
@@ -138,9 +128,9 @@ TEST_F(ObjectChangesTest, DetectorMissesAloneRemoveNothing) {
 
 TEST_F(ObjectChangesTest, AMovedCupKeepsItsIdAndBothPlaces) {
   Mapper mapper{config_};
-  MapVisit(&mapper, kFirstVisit, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});
+  MapVisit(&mapper, kFirstEyes, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});
   const ObjectId cup_two = ObjectAt(mapper, kCupTwo);
-  MapVisit(&mapper, kSecondVisit, {kCupOne, kCupTwoMoved}, {kCupOne, kCupTwoMoved});
+  MapVisit(&mapper, kSecondEyes, {kCupOne, kCupTwoMoved}, {kCupOne, kCupTwoMoved});
   const ObjectId new_place = ObjectAt(mapper, kCupTwoMoved);
   ASSERT_NE(new_place, 0);
   ASSERT_NE(new_place, cup_two);  // the map keeps one object per place ...
@@ -189,8 +179,8 @@ TEST_F(ObjectChangesTest, LookAlikesAreNoGuessedMoveWhenAmbiguityIsChecked) {
   MapperConfig undecided;
   undecided.changes.move_ambiguity_colour_margin = 15.f;
   Mapper mapper{undecided};
-  MapVisit(&mapper, kFirstVisit, {blue_one, kCupTwo}, {blue_one, kCupTwo});
-  MapVisit(&mapper, kSecondVisit, {kCupTwoMoved}, {kCupTwoMoved});
+  MapVisit(&mapper, kFirstEyes, {blue_one, kCupTwo}, {blue_one, kCupTwo});
+  MapVisit(&mapper, kSecondEyes, {kCupTwoMoved}, {kCupTwoMoved});
   std::map<ObjectChange::Kind, int> kinds;
   for (const ObjectChange& change : ChangeList(mapper.Changes())) ++kinds[change.kind];
   EXPECT_EQ(kinds[ObjectChange::Kind::kRemoved], 2);
@@ -199,8 +189,8 @@ TEST_F(ObjectChangesTest, LookAlikesAreNoGuessedMoveWhenAmbiguityIsChecked) {
 
   // With the ambiguity check off (the default), the best fit is taken: one move, one removal.
   Mapper guesser{config_};
-  MapVisit(&guesser, kFirstVisit, {blue_one, kCupTwo}, {blue_one, kCupTwo});
-  MapVisit(&guesser, kSecondVisit, {kCupTwoMoved}, {kCupTwoMoved});
+  MapVisit(&guesser, kFirstEyes, {blue_one, kCupTwo}, {blue_one, kCupTwo});
+  MapVisit(&guesser, kSecondEyes, {kCupTwoMoved}, {kCupTwoMoved});
   kinds.clear();
   for (const ObjectChange& change : ChangeList(guesser.Changes())) ++kinds[change.kind];
   EXPECT_EQ(kinds[ObjectChange::Kind::kMoved], 1);
@@ -209,8 +199,8 @@ TEST_F(ObjectChangesTest, LookAlikesAreNoGuessedMoveWhenAmbiguityIsChecked) {
 
 TEST_F(ObjectChangesTest, ACupPutWhereTheTableWasSeenEmptyIsAdded) {
   Mapper mapper{config_};
-  MapVisit(&mapper, kFirstVisit, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});
-  MapVisit(&mapper, kSecondVisit, {kCupOne, kCupTwo, kCupThree}, {kCupOne, kCupTwo, kCupThree});
+  MapVisit(&mapper, kFirstEyes, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});
+  MapVisit(&mapper, kSecondEyes, {kCupOne, kCupTwo, kCupThree}, {kCupOne, kCupTwo, kCupThree});
   const ObjectId cup_three = ObjectAt(mapper, kCupThree);
   ASSERT_NE(cup_three, 0);
   const ObjectChanges changes = mapper.Changes();
@@ -226,8 +216,8 @@ TEST_F(ObjectChangesTest, ACupPutWhereTheTableWasSeenEmptyIsAdded) {
 
 TEST_F(ObjectChangesTest, ARestartFindsTheSameChanges) {
   Mapper live{config_};
-  MapVisit(&live, kFirstVisit, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});
-  MapVisit(&live, kSecondVisit, {kCupTwoMoved, kCupThree}, {kCupTwoMoved, kCupThree});
+  MapVisit(&live, kFirstEyes, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});
+  MapVisit(&live, kSecondEyes, {kCupTwoMoved, kCupThree}, {kCupTwoMoved, kCupThree});
   std::map<KeyframeId, KeyframeRecord> records;
   for (KeyframeId id = 1; id <= 6; ++id) records[id] = *live.FindKeyframe(id);
   std::map<ObjectId, std::vector<ObjectObservation>> observations;
@@ -251,8 +241,8 @@ TEST_F(ObjectChangesTest, ChangesCanBeSwitchedOff) {
   MapperConfig config;
   config.changes.enabled = false;
   Mapper mapper{config};
-  MapVisit(&mapper, kFirstVisit, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});
-  MapVisit(&mapper, kSecondVisit, {kCupOne}, {kCupOne});
+  MapVisit(&mapper, kFirstEyes, {kCupOne, kCupTwo}, {kCupOne, kCupTwo});
+  MapVisit(&mapper, kSecondEyes, {kCupOne}, {kCupOne});
   EXPECT_TRUE(mapper.Changes().histories.empty());
   std::string why;
   config.changes.min_empty_views = 0;
