@@ -311,6 +311,12 @@ bool MapNode::Impl::TrackFrame(RgbdFrame* frame, const ros::Time& stamp,
     *why = "tracking lost: " + report.why;
     return false;
   }
+  if (report.status == TrackingStatus::kProvisional) {
+    // Tracked in a frame of its own until a frame is placed in the map: nothing to publish
+    // or map in the map's frame yet.
+    *why = "not placed in the map yet: " + report.why;
+    return false;
+  }
   frame->T_W_C = report.T_W_C;
   geometry_msgs::TransformStamped transform;
   transform.header.stamp = stamp;

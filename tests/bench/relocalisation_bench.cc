@@ -7,6 +7,9 @@
 // keyframe tried in turn (relocalisation_keyframes = all, no appearance candidates).
 //   relocalisation_bench [sequence=../shared/data/redkitchen] [map_first=0] [map_last=449]
 //                        [map_step=15] [start_first=550] [start_last=999] [start_step=25]
+//                        [start_sequence=sequence]
+// A start_sequence (another recording of the same place in the same world frame: objmap_sim
+// --revisit's second session) gives the starts; the map is always made from `sequence`.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -51,7 +54,8 @@ Attempt Place(const OdometryConfig& config, const std::vector<RgbdFrame>& map,
   const TrackingReport report = odometry.Track(start);
   Attempt attempt;
   attempt.ms = report.ms;
-  attempt.placed = report.status != TrackingStatus::kLost;
+  // A start not placed is kLost or, with provisional fragments, tracked in a frame of its own.
+  attempt.placed = report.status != TrackingStatus::kLost && report.fragment == 0;
   if (attempt.placed) {
     const Eigen::Isometry3d error = start.T_W_C.inverse() * report.T_W_C;
     attempt.error_cm = 100.0 * error.translation().norm();
@@ -83,22 +87,29 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "relocalisation_bench: steps must be > 0\n");
     return 1;
   }
+  const std::string start_path = argc > 8 ? argv[8] : path;
   std::string why;
-  std::unique_ptr<SequenceReader> reader = OpenSequence(path, &why);
-  if (!reader) {
-    std::fprintf(stderr, "relocalisation_bench: %s\n", why.c_str());
-    return 1;
-  }
-  auto read = [&](long index, RgbdFrame* frame) {
-    if (index < 0 || static_cast<std::size_t>(index) >= reader->size()) return false;
-    if (reader->ReadFrame(static_cast<std::size_t>(index), frame, &why)) return true;
+  auto open = [&](const std::string& sequence) {
+    std::unique_ptr<SequenceReader> reader = OpenSequence(sequence, &why);
+    if (!reader) {
+      std::fprintf(stderr, "relocalisation_bench: %s\n", why.c_str());
+      std::exit(1);
+    }
+    return reader;
+  };
+  const std::unique_ptr<SequenceReader> map_reader = open(path);
+  const std::unique_ptr<SequenceReader> start_reader =
+      start_path == path ? nullptr : open(start_path);
+  auto read = [&](const SequenceReader& reader, long index, RgbdFrame* frame) {
+    if (index < 0 || static_cast<std::size_t>(index) >= reader.size()) return false;
+    if (reader.ReadFrame(static_cast<std::size_t>(index), frame, &why)) return true;
     std::fprintf(stderr, "relocalisation_bench: %s\n", why.c_str());
     std::exit(1);
   };
   std::vector<RgbdFrame> map;
   for (long i = map_first; i <= map_last; i += map_step) {
     RgbdFrame frame;
-    if (read(i, &frame)) map.push_back(std::move(frame));
+    if (read(*map_reader, i, &frame)) map.push_back(std::move(frame));
   }
   OdometryConfig objmap_config;
   OdometryConfig every_keyframe = objmap_config;
@@ -112,7 +123,7 @@ int main(int argc, char** argv) {
   std::printf("%6s  %-38s  %-38s\n", "frame", "objmap", "every keyframe tried");
   for (long i = start_first; i <= start_last; i += start_step) {
     RgbdFrame start;
-    if (!read(i, &start)) break;
+    if (!read(start_reader ? *start_reader : *map_reader, i, &start)) break;
     double ms = 0.0;
     const Attempt ours = Place(objmap_config, map, start, &ms);
     seed_ms.push_back(ms);

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <map>
 
 #include "dataset/sequence_reader.h"
 #include "map_server/map_server.h"
@@ -303,6 +304,62 @@ TEST_F(Relocalisation, ASessionStartingElsewhereInTheMapIsPlacedAndMapsEveryKeyf
     EXPECT_LT(Eigen::AngleAxisd(error.linear()).angle(), 3.0 * M_PI / 180.0) << "frame " << index;
   }
   EXPECT_EQ(server->Status().keyframes, keyframes_before + 5);
+}
+
+// A session that starts off the map (frame 640; the map holds frames 250..350) and walks back
+// into it: its first keyframes are held in a provisional fragment (refused with the reason, not
+// yet stored), and the keyframe that places the session maps them all at their poses, before
+// itself. Every keyframe sent ends in the map near the sequence's pose.
+TEST_F(Relocalisation, KeyframesBeforeASessionIsPlacedAreHeldThenMapped) {
+  if (!OpenSequenceOrSkip()) GTEST_SKIP() << "SKIPPED: ../shared/data/redkitchen is absent";
+  {
+    auto server = OpenServer();
+    ASSERT_TRUE(server);
+    MapFrames(server.get(), 250, 350, 5);
+  }
+  auto server = OpenServer();
+  ASSERT_TRUE(server);
+  const std::size_t keyframes_before = server->Status().keyframes;
+  std::map<KeyframeId, std::size_t> frame_of;  // every keyframe mapped, by id
+  std::size_t sent = 0, held = 0, placed_at = 0;
+  for (std::size_t index = 640; index >= 540; index -= 10) {
+    ++sent;
+    AddKeyframeOutcome outcome;
+    const ServiceStatus status =
+        server->AddKeyframe(Frame(index), std::vector<Detection>{}, &outcome);
+    if (!status.ok()) {
+      ASSERT_EQ(placed_at, 0u) << "frame " << index
+                               << " refused after the session was placed: " << status.message;
+      ASSERT_EQ(status.code, StatusCode::kFailedPrecondition) << status.message;
+      EXPECT_TRUE(outcome.untracked && outcome.held) << status.message;
+      EXPECT_EQ(outcome.held_fragment, 1);
+      EXPECT_NE(status.message.find("held"), std::string::npos) << status.message;
+      EXPECT_EQ(server->Status().keyframes, keyframes_before);  // not stored while held
+      ++held;
+      continue;
+    }
+    if (placed_at == 0) {
+      placed_at = index;
+      EXPECT_TRUE(outcome.relocalized);
+      ASSERT_EQ(outcome.attached.size(), held) << "frame " << index;
+      // Held in order from frame 640 on, every 10th.
+      for (std::size_t i = 0; i < held; ++i) frame_of[outcome.attached[i]] = 640 - 10 * i;
+    } else {
+      EXPECT_TRUE(outcome.attached.empty());
+    }
+    frame_of[outcome.keyframe_id] = index;
+  }
+  ASSERT_GT(held, 0u) << "frame 640 was placed at once: the test needs a start off the map";
+  ASSERT_GT(placed_at, 0u) << "the session was never placed";
+  EXPECT_EQ(server->Status().keyframes, keyframes_before + sent);
+  EXPECT_EQ(frame_of.size(), sent);
+  for (const auto& [id, index] : frame_of) {
+    RgbdFrame stored;
+    ASSERT_TRUE(server->StoredFrame(id, &stored).ok()) << "keyframe " << id;
+    const Eigen::Isometry3d error = TruthInMap(index).inverse() * stored.T_W_C;
+    EXPECT_LT(error.translation().norm(), 0.05) << "frame " << index;
+    EXPECT_LT(Eigen::AngleAxisd(error.linear()).angle(), 3.0 * M_PI / 180.0) << "frame " << index;
+  }
 }
 
 // Starts the map cannot explain (views of other parts of the kitchen than the map's) are refused

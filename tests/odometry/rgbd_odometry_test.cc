@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -154,6 +155,108 @@ TEST(RgbdOdometry, BlankFramesAreLostWithTheReasonAndTrackingRecovers) {
   ASSERT_NE(report.status, TrackingStatus::kLost) << report.why;
   const Eigen::Isometry3d expected = origin.T_W_C.inverse() * back.T_W_C;
   EXPECT_LT((expected.inverse() * report.T_W_C).translation().norm(), 0.03);
+}
+
+// A saved map of frames 250..350 (every 5th, at the sequence's poses), then a session of the
+// frames `session` (in that order) on it; the sequence's pose of every keyframe the session made.
+struct SessionOnMap {
+  std::unique_ptr<RgbdOdometry> odometry;
+  int map_keyframes = 0;
+  std::vector<TrackingReport> reports;
+  std::vector<Eigen::Isometry3d> keyframe_truth;  // per session keyframe, in order
+};
+
+SessionOnMap TrackSessionOnMap(const SequenceReader& reader,
+                               const std::vector<std::size_t>& session) {
+  SessionOnMap run;
+  run.odometry = std::make_unique<RgbdOdometry>(OdometryConfig{});
+  for (std::size_t i = 250; i <= 350; i += 5) {
+    std::string why;
+    EXPECT_TRUE(run.odometry->AddMapKeyframe(ReadFrame(reader, i), &why)) << why;
+  }
+  run.map_keyframes = run.odometry->num_keyframes();
+  for (const std::size_t i : session) {
+    const RgbdFrame frame = ReadFrame(reader, i);
+    run.reports.push_back(run.odometry->Track(frame));
+    if (run.reports.back().new_keyframe) run.keyframe_truth.push_back(frame.T_W_C);
+  }
+  return run;
+}
+
+// A session starting where the map has no view like its own (frame 640; the map holds frames
+// 250..350) is tracked in a provisional fragment; the first frame a map keyframe places attaches
+// it, and every keyframe the session made, before and after, lies near the sequence's pose.
+TEST(RgbdOdometry, ASessionStartingOffTheMapIsTrackedApartThenAttached) {
+  const std::string folder = testing::SharedDataPath("redkitchen");
+  OBJMAP_REQUIRE_PATH(folder);
+  std::string why;
+  auto reader = OpenSequence(folder, &why);
+  ASSERT_NE(reader, nullptr) << why;
+  std::vector<std::size_t> session;
+  for (std::size_t i = 640; i >= 540; i -= 5) session.push_back(i);  // walking back into the map
+  const SessionOnMap run = TrackSessionOnMap(*reader, session);
+  ASSERT_EQ(run.reports.front().status, TrackingStatus::kProvisional) << run.reports.front().why;
+  EXPECT_EQ(run.reports.front().fragment, 1);
+  std::size_t attached_at = run.reports.size();
+  for (std::size_t i = 0; i < run.reports.size(); ++i) {
+    const TrackingReport& report = run.reports[i];
+    ASSERT_NE(report.status, TrackingStatus::kLost) << "frame " << session[i] << ": " << report.why;
+    if (report.attached_fragment == 1) attached_at = i;
+    if (attached_at == run.reports.size()) {
+      EXPECT_EQ(report.fragment, 1) << "frame " << session[i];
+    } else {
+      EXPECT_EQ(report.fragment, 0) << "frame " << session[i];
+    }
+  }
+  ASSERT_LT(attached_at, run.reports.size()) << "the session was never placed in the map";
+  EXPECT_GT(attached_at, 0u);
+  EXPECT_EQ(run.odometry->fragments_started(), 1);
+  EXPECT_EQ(run.odometry->fragments_attached(), 1);
+  // Every keyframe of the session, those made while provisional included, in the map's frame
+  // near the sequence's pose (whose two halves disagree by about 2 degrees, docs/evaluation.md).
+  ASSERT_EQ(static_cast<std::size_t>(run.odometry->num_keyframes() - run.map_keyframes),
+            run.keyframe_truth.size());
+  for (int k = run.map_keyframes; k < run.odometry->num_keyframes(); ++k) {
+    EXPECT_EQ(run.odometry->KeyframeFragment(k), 0) << "keyframe " << k;
+    const Eigen::Isometry3d error =
+        run.keyframe_truth[static_cast<std::size_t>(k - run.map_keyframes)].inverse() *
+        run.odometry->KeyframePose(k);
+    EXPECT_LT(error.translation().norm(), 0.05) << "keyframe " << k;
+    EXPECT_LT(AngleDeg(error), 3.0) << "keyframe " << k;
+  }
+}
+
+// A session in a part of the kitchen the map does not hold (frames 750..800 against a map of
+// 250..350) is never placed: it stays a provisional fragment of its own, and with the option off
+// its frames are lost as before.
+TEST(RgbdOdometry, ASessionTheMapDoesNotHoldStaysApart) {
+  const std::string folder = testing::SharedDataPath("redkitchen");
+  OBJMAP_REQUIRE_PATH(folder);
+  std::string why;
+  auto reader = OpenSequence(folder, &why);
+  ASSERT_NE(reader, nullptr) << why;
+  std::vector<std::size_t> session;
+  for (std::size_t i = 750; i <= 800; i += 5) session.push_back(i);
+  const SessionOnMap run = TrackSessionOnMap(*reader, session);
+  for (std::size_t i = 0; i < run.reports.size(); ++i) {
+    EXPECT_EQ(run.reports[i].status, TrackingStatus::kProvisional) << "frame " << session[i];
+    EXPECT_GT(run.reports[i].fragment, 0) << "frame " << session[i];
+    EXPECT_EQ(run.reports[i].attached_fragment, -1) << "frame " << session[i];
+  }
+  EXPECT_EQ(run.odometry->fragments_attached(), 0);
+  for (int k = run.map_keyframes; k < run.odometry->num_keyframes(); ++k) {
+    EXPECT_NE(run.odometry->KeyframeFragment(k), 0) << "keyframe " << k;
+  }
+
+  OdometryConfig without;
+  without.provisional_fragments = false;
+  RgbdOdometry odometry{without};
+  for (std::size_t i = 250; i <= 350; i += 5) {
+    ASSERT_TRUE(odometry.AddMapKeyframe(ReadFrame(*reader, i), &why)) << why;
+  }
+  const TrackingReport lost = odometry.Track(ReadFrame(*reader, 750));
+  EXPECT_EQ(lost.status, TrackingStatus::kLost);
+  EXPECT_FALSE(lost.why.empty());
 }
 
 // A loop for certain: frames 0..239 forward, then back to 0 (the camera retraces its path), so

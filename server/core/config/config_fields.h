@@ -144,6 +144,7 @@ void VisitObjmapConfig(ObjmapConfig* c, Visitor& v) {
   v("checkpoint_work_ratio", &s.checkpoint_work_ratio);
   v("pose_source", &s.pose_source);
   v("relocalisation_map_keyframes", &s.relocalisation_map_keyframes);
+  v("max_held_keyframes", &s.max_held_keyframes);
   // The request limits (RequestLimits) sit beside the server's other bounds.
   v("max_image_pixels", &s.limits.max_image_pixels);
   v("max_detections_per_keyframe", &s.limits.max_detections_per_keyframe);

@@ -100,6 +100,10 @@ bool MapServerConfig::IsValid(std::string* why) const {
     *why = "MapServerConfig.checkpoint_work_ratio must be finite and >= 0";
     return false;
   }
+  if (max_held_keyframes < 0) {
+    *why = "MapServerConfig.max_held_keyframes must be >= 0 (0: none held)";
+    return false;
+  }
   if (relocalisation_map_keyframes < 0) {
     *why = "MapServerConfig.relocalisation_map_keyframes must be >= 0 (0: all)";
     return false;

@@ -93,6 +93,11 @@ struct MapServerConfig {
   /// keyframes (the newest ones) that tracking loads at each session start to place the camera
   /// in the saved map by relocalisation (about 5 ms each, docs/benchmarks.md). 0: all of them.
   int relocalisation_map_keyframes = 0;
+  /// Config key server.max_held_keyframes. With kEstimate: keyframes of a part of a session not
+  /// placed in the map yet (a provisional fragment, OdometryConfig::provisional_fragments) are
+  /// held in memory, detected, until a keyframe of that part is placed, then mapped at their
+  /// poses; at most this many in all (the oldest go first). 0: none are held.
+  int max_held_keyframes = 200;
   /// What one request may ask (config section server: max_image_pixels, ...).
   RequestLimits limits;
   /// How writes and queries share the CPU (config section server: heavy_query_threads, ...).
@@ -228,6 +233,14 @@ struct AddKeyframeOutcome {
   /// lost, no saved keyframe explains the frame); the keyframe is not mapped. The same with
   /// kSessionFrame while the session's frame is not placed in the map yet.
   bool untracked = false;
+  /// PoseSource::kEstimate, untracked: the keyframe is held (in memory, not stored) in
+  /// provisional fragment `held_fragment` with the others of its part of the session, and is
+  /// mapped at its pose once one of them is placed (MapServerConfig::max_held_keyframes).
+  bool held = false;
+  int held_fragment = 0;
+  /// PoseSource::kEstimate: the held keyframes this keyframe's placement mapped (before it), in
+  /// the order they came.
+  std::vector<KeyframeId> attached;
 };
 
 struct PoseUpdateOutcome {

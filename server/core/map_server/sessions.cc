@@ -99,6 +99,9 @@ void MapServer::Impl::BeginSessionTracking(const MapServer& server) {
   if (config.pose_source == PoseSource::kEstimate) {
     odometry = std::make_unique<RgbdOdometry>(config.odometry);
     tracked_keyframes = TrackedKeyframes{};
+    // Held keyframes lie on the old odometry's keyframes: a new session cannot place them.
+    held_keyframes.clear();
+    held_count = 0;
     tracker = odometry.get();
   } else if (config.pose_source == PoseSource::kSessionFrame) {
     T_map_session.reset();
@@ -129,7 +132,9 @@ ServiceStatus MapServer::Impl::PlaceInSessionFrame(RgbdFrame* frame, bool* place
   }
   if (!tracking_blocked.empty()) return {StatusCode::kFailedPrecondition, tracking_blocked};
   const TrackingReport report = session_placer->Track(*frame);
-  if (report.status == TrackingStatus::kLost) {
+  // Tracked in a provisional fragment of its own is not placed either: the session's frame is
+  // known once a keyframe is placed in the map's.
+  if (report.status == TrackingStatus::kLost || report.fragment != 0) {
     return {StatusCode::kFailedPrecondition,
             frame->name + ": its session's frame is not placed in the map yet (" + report.why +
                 "); the session's keyframes are mapped once one of them is placed"};

@@ -37,7 +37,10 @@ ServiceStatus MapServer::AddKeyframe(RgbdFrame frame,
       return {StatusCode::kFailedPrecondition, impl_->tracking_blocked};
     }
     tracked = impl_->odometry->Track(frame);
-    if (tracked.status == TrackingStatus::kLost) {
+    const bool hold =
+        tracked.status == TrackingStatus::kProvisional && impl_->config.max_held_keyframes > 0;
+    if (tracked.status == TrackingStatus::kLost ||
+        (tracked.status == TrackingStatus::kProvisional && !hold)) {
       *outcome = AddKeyframeOutcome{};
       outcome->untracked = true;
       return {StatusCode::kFailedPrecondition,
@@ -57,10 +60,28 @@ ServiceStatus MapServer::AddKeyframe(RgbdFrame frame,
     if (!detected) return ServiceStatus::Invalid("detector: " + why);
   }
   const Eigen::Isometry3d mapped_pose = frame.T_W_C;
+  const std::string name = frame.name;
   job->frame = std::move(frame);
   {
     std::lock_guard<std::mutex> lock(impl_->session_mutex);
     job->session = impl_->session;
+  }
+  if (impl_->odometry && tracked.status == TrackingStatus::kProvisional) {
+    const std::size_t held = impl_->Hold(job, tracked);
+    *outcome = AddKeyframeOutcome{};
+    outcome->untracked = true;
+    outcome->held = true;
+    outcome->held_fragment = tracked.fragment;
+    return {StatusCode::kFailedPrecondition,
+            name + ": not placed in the map yet (" + tracked.why + "); held in provisional part " +
+                std::to_string(tracked.fragment) + " of the session (" + std::to_string(held) +
+                " keyframes), in memory only: mapped at their poses once one of them is placed, "
+                "lost if the server stops or a new session starts first"};
+  }
+  std::vector<KeyframeId> attached;
+  if (impl_->odometry && tracked.attached_fragment > 0) {
+    const ServiceStatus mapped = impl_->MapHeld(tracked.attached_fragment, &attached);
+    if (!mapped.ok()) return mapped;
   }
   const std::shared_future<MapJob::Result> done = job->result;
   ServiceStatus queued = impl_->Enqueue(job, /*bounded=*/true);
@@ -68,6 +89,7 @@ ServiceStatus MapServer::AddKeyframe(RgbdFrame frame,
   MapJob::Result result = done.get();
   if (!result.status.ok()) return result.status;
   *outcome = std::move(result.keyframe);
+  outcome->attached = std::move(attached);
   outcome->T_W_C = mapped_pose;
   outcome->relocalized = placed_session_frame;
   if (!impl_->odometry) return result.status;
@@ -85,6 +107,51 @@ ServiceStatus MapServer::AddKeyframe(RgbdFrame frame,
                               updated.message};
   }
   return result.status;
+}
+
+std::size_t MapServer::Impl::Hold(std::shared_ptr<MapJob> job, const TrackingReport& tracked) {
+  HeldKeyframe held;
+  held.job = std::move(job);
+  held.odometry_keyframe = tracked.reference_keyframe;
+  held.T_K_C = odometry->KeyframePose(tracked.reference_keyframe).inverse() * tracked.T_W_C;
+  held_keyframes[tracked.fragment].push_back(std::move(held));
+  ++held_count;
+  // Beyond the bound, the oldest part's oldest keyframe goes: memory stays bounded on a session
+  // that never overlaps the map.
+  while (held_count > static_cast<std::size_t>(config.max_held_keyframes) &&
+         !held_keyframes.empty()) {
+    auto oldest = held_keyframes.begin();
+    oldest->second.erase(oldest->second.begin());
+    --held_count;
+    if (oldest->second.empty()) held_keyframes.erase(oldest);
+  }
+  const auto fragment = held_keyframes.find(tracked.fragment);
+  return fragment == held_keyframes.end() ? 0 : fragment->second.size();
+}
+
+ServiceStatus MapServer::Impl::MapHeld(int fragment, std::vector<KeyframeId>* mapped) {
+  const auto found = held_keyframes.find(fragment);
+  if (found == held_keyframes.end()) return ServiceStatus::Ok();
+  std::vector<HeldKeyframe> keyframes = std::move(found->second);
+  held_keyframes.erase(found);
+  held_count -= keyframes.size();
+  for (HeldKeyframe& held : keyframes) {
+    // The fragment now lies in the map's frame: each keyframe where its odometry keyframe went.
+    held.job->frame.T_W_C = odometry->KeyframePose(held.odometry_keyframe) * held.T_K_C;
+    const std::shared_future<MapJob::Result> done = held.job->result;
+    const ServiceStatus queued = Enqueue(held.job, /*bounded=*/true);
+    if (!queued.ok()) {
+      return {queued.code, "the held keyframes of the part just placed: " + queued.message};
+    }
+    const MapJob::Result result = done.get();
+    if (!result.status.ok()) {
+      return {result.status.code, "a held keyframe of the part just placed (" +
+                                      held.job->frame.name + "): " + result.status.message};
+    }
+    tracked_keyframes.AddRelative(result.keyframe.keyframe_id, held.odometry_keyframe, held.T_K_C);
+    mapped->push_back(result.keyframe.keyframe_id);
+  }
+  return ServiceStatus::Ok();
 }
 
 ServiceStatus MapServer::UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses,

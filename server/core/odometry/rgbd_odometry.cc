@@ -1,24 +1,25 @@
 #include "odometry/rgbd_odometry.h"
 
-#include "odometry/appearance_index.h"
-#include "odometry/depth_alignment.h"
-#include "posegraph/pose_graph.h"
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
 #include <deque>
 #include <exception>
+#include <functional>
 #include <memory>
 #include <mutex>
-#include <thread>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/core/eigen.hpp>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
+#include <thread>
 #include <vector>
+
+#include "odometry/appearance_index.h"
+#include "odometry/depth_alignment.h"
+#include "posegraph/pose_graph.h"
 
 namespace objmap {
 namespace {
@@ -96,16 +97,17 @@ void IndexKeyframes(const KeyframeList& keyframes, int last, AppearanceIndex* in
   }
 }
 
-// Of `candidates` (less those in `skip`), the at most `count` keyframes whose strongest
+// Of `candidates` (those `eligible`), the at most `count` keyframes whose strongest
 // descriptors pass the ratio test against `mine` most often, and at least `min_matches` times;
 // the most matched first.
 std::vector<int> MostMatched(const cv::Mat& mine, const std::vector<int>& candidates,
-                             const std::vector<int>& skip, const KeyframeList& keyframes,
-                             float match_ratio, int min_matches, int count) {
+                             const std::function<bool(int)>& eligible,
+                             const KeyframeList& keyframes, float match_ratio, int min_matches,
+                             int count) {
   const cv::BFMatcher matcher(cv::NORM_HAMMING);
   std::vector<std::pair<int, int>> scored;  // (matches, keyframe)
   for (const int k : candidates) {
-    if (std::find(skip.begin(), skip.end(), k) != skip.end()) continue;
+    if (!eligible(k)) continue;
     const cv::Mat& theirs = keyframes[static_cast<std::size_t>(k)]->strongest_descriptors;
     if (theirs.rows < 2) continue;
     std::vector<std::vector<cv::DMatch>> knn;
@@ -192,6 +194,8 @@ const char* TrackingStatusName(TrackingStatus status) {
       return "tracked";
     case TrackingStatus::kRelocalized:
       return "relocalized";
+    case TrackingStatus::kProvisional:
+      return "provisional";
     case TrackingStatus::kLost:
       return "lost";
   }
@@ -206,6 +210,7 @@ struct LoopJob {
   CameraIntrinsics intrinsics;
   std::vector<std::shared_ptr<const Keyframe>> keyframes;  // 0..newest
   std::vector<Eigen::Isometry3d> poses;                   // 0..newest
+  std::vector<int> fragments;                             // 0..newest: Impl::fragment_of
   std::vector<PoseGraphEdge> edges;
 };
 
@@ -217,6 +222,7 @@ struct LoopClosure {
   std::vector<Eigen::Isometry3d> poses;
   std::vector<PoseGraphEdge> edges;
   std::size_t job_edges = 0;  // edges the job started from: later ones were added meanwhile
+  std::vector<int> fragments;  // the job's: only keyframes in the map's frame (0) were solved
   double ms = 0.0;
 };
 
@@ -229,6 +235,12 @@ struct RgbdOdometry::Impl {
   // Written by the tracking thread only, under `mutex` (the worker copies them under it).
   std::vector<std::shared_ptr<const Keyframe>> keyframes;
   std::vector<Eigen::Isometry3d> poses;
+  // The frame each keyframe's pose is in: 0 the map's, > 0 a provisional fragment's
+  // (OdometryConfig::provisional_fragments). Poses compare only within one fragment.
+  std::vector<int> fragment_of;
+  int current_fragment = 0;  // the fragment of current_keyframe
+  int fragments_started = 0;
+  int fragments_attached = 0;
   // Pose graph over the keyframes: an odometry edge from each keyframe to the one it was
   // tracked from, loop edges to older keyframes that see the same place.
   std::vector<PoseGraphEdge> edges;
@@ -261,7 +273,21 @@ struct RgbdOdometry::Impl {
   bool Extract(const RgbdFrame& frame, FrameFeatures* features, std::string* why);
   PoseFit Fit(const FrameFeatures& features, const Keyframe& keyframe,
               const CameraIntrinsics& K) const;
+  // Adds a keyframe in current_fragment's frame and makes it the current one.
   void AddKeyframe(const FrameFeatures& features, const Eigen::Isometry3d& T_W_C);
+  // Starts provisional fragment number fragments_started + 1 with the frame as its first
+  // keyframe, at the identity of the fragment's frame. False when too few keypoints have depth.
+  bool StartFragment(const FrameFeatures& features);
+  // Tries to place the frame, tracked at T_F_C in the current provisional fragment, in the map
+  // by the map's keyframes that look like it (strict test). Placed: every keyframe of the
+  // fragment moves into the map's frame, the frame's pose in it is *T_W_C and *fit, *reference
+  // say against which keyframe.
+  bool AttachFragment(const FrameFeatures& features, const CameraIntrinsics& K,
+                      const Eigen::Isometry3d& T_F_C, Eigen::Isometry3d* T_W_C, PoseFit* fit,
+                      int* reference);
+  // A fit strong enough to place a camera that may be anywhere (relocalisation_min_inliers, the
+  // dense step agreeing with the features).
+  bool Strong(const PoseFit& fit) const;
   // The first keyframe, at T_W_C: tracking starts from it. False when too few keypoints have
   // depth.
   bool Start(const FrameFeatures& features, const Eigen::Isometry3d& T_W_C, std::string* why);
@@ -287,7 +313,7 @@ struct RgbdOdometry::Impl {
   // Keyframes anywhere in the map that look most like `features` (appearance index, then the
   // ratio test on the strongest descriptors), best first, at most `count`, none of `skip`.
   std::vector<int> LookAlikeKeyframes(const FrameFeatures& features, int count,
-                                      const std::vector<int>& skip);
+                                      const std::function<bool(int)>& eligible);
   AppearanceIndex appearance_index;
   int indexed_keyframes = 0;
   // Moves the keyframes as `closure` says (those made since its job by the same correction as
@@ -325,6 +351,7 @@ LoopJob RgbdOdometry::Impl::MakeLoopJob(std::shared_ptr<const FrameFeatures> fea
   job.intrinsics = K;
   job.keyframes = keyframes;
   job.poses = poses;
+  job.fragments = fragment_of;
   job.edges = edges;
   return job;
 }
@@ -346,7 +373,12 @@ std::vector<int> RgbdOdometry::Impl::AppearanceCandidates(const LoopJob& job,
   } else {
     for (int k = 0; k <= last_old; ++k) shortlist.push_back(k);
   }
-  return MostMatched(mine, shortlist, already, job.keyframes, config.match_ratio,
+  // Keyframes of a provisional fragment have poses in another frame: no loop to them.
+  auto eligible = [&](int k) {
+    return job.fragments[static_cast<std::size_t>(k)] == 0 &&
+           std::find(already.begin(), already.end(), k) == already.end();
+  };
+  return MostMatched(mine, shortlist, eligible, job.keyframes, config.match_ratio,
                      config.loop_min_inliers, config.loop_appearance_candidates);
 }
 
@@ -355,6 +387,7 @@ LoopClosure RgbdOdometry::Impl::CloseLoops(const LoopJob& job) {
   LoopClosure closure;
   closure.newest = job.newest;
   closure.job_edges = job.edges.size();
+  closure.fragments = job.fragments;
   auto finish = [&]() -> LoopClosure {
     closure.ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     return closure;
@@ -362,8 +395,11 @@ LoopClosure RgbdOdometry::Impl::CloseLoops(const LoopJob& job) {
   if (config.loop_candidates <= 0) return finish();
   const int newest = job.newest;
   const Eigen::Isometry3d& T_W_new = job.poses[static_cast<std::size_t>(newest)];
+  auto in_map_frame = [&](int k) { return job.fragments[static_cast<std::size_t>(k)] == 0; };
+  if (!in_map_frame(newest)) return finish();
   std::vector<std::pair<double, int>> near;
   for (int k = 0; k + config.loop_min_keyframe_gap <= newest; ++k) {
+    if (!in_map_frame(k)) continue;
     const Eigen::Isometry3d offset = job.poses[static_cast<std::size_t>(k)].inverse() * T_W_new;
     if (offset.translation().norm() <= config.loop_search_radius_m &&
         AngleDeg(offset.linear()) <= config.loop_search_angle_deg) {
@@ -392,18 +428,28 @@ LoopClosure RgbdOdometry::Impl::CloseLoops(const LoopJob& job) {
     ++added;
   }
   if (added == 0) return finish();
+  // The graph of the keyframes in the map's frame: a provisional fragment's are tied to it by
+  // no edge until it is attached.
   PoseGraph graph;
-  for (int k = 0; k <= newest; ++k) graph.AddNode(k, job.poses[static_cast<std::size_t>(k)]);
+  for (int k = 0; k <= newest; ++k) {
+    if (in_map_frame(k)) graph.AddNode(k, job.poses[static_cast<std::size_t>(k)]);
+  }
   for (int k = 0; k < map_keyframes && k <= newest; ++k) graph.SetFixed(k);
   std::string why;
-  for (const PoseGraphEdge& edge : edges) {
-    if (!graph.AddEdge(edge, &why)) return finish();
+  std::vector<std::size_t> in_graph;  // graph edge -> index in `edges`
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    if (edges[e].from > newest || edges[e].to > newest || !in_map_frame(edges[e].from) ||
+        !in_map_frame(edges[e].to)) {
+      continue;
+    }
+    if (!graph.AddEdge(edges[e], &why)) return finish();
+    in_graph.push_back(e);
   }
   PoseGraphReport report;
   if (!graph.Optimize(&report, &why)) return finish();
   // Wrong loops stay out of later solves.
   std::vector<bool> dropped(edges.size(), false);
-  for (int e : report.rejected_loops) dropped[static_cast<std::size_t>(e)] = true;
+  for (int e : report.rejected_loops) dropped[in_graph[static_cast<std::size_t>(e)]] = true;
   int kept_loops = added;
   for (std::size_t e = 0; e < edges.size(); ++e) {
     if (!dropped[e]) {
@@ -413,7 +459,7 @@ LoopClosure RgbdOdometry::Impl::CloseLoops(const LoopJob& job) {
     }
   }
   closure.loops = kept_loops;
-  closure.poses.resize(static_cast<std::size_t>(newest) + 1);
+  closure.poses.assign(job.poses.begin(), job.poses.begin() + newest + 1);
   for (const auto& [k, pose] : graph.poses()) closure.poses[static_cast<std::size_t>(k)] = pose;
   return finish();
 }
@@ -424,13 +470,15 @@ int RgbdOdometry::Impl::Apply(LoopClosure closure) {
   const auto newest = static_cast<std::size_t>(closure.newest);
   const Eigen::Isometry3d correction = closure.poses[newest] * poses[newest].inverse();
   for (std::size_t k = 0; k < poses.size(); ++k) {
-    poses[k] = k <= newest ? closure.poses[k] : correction * poses[k];
+    if (fragment_of[k] != 0) continue;  // a provisional fragment's frame is its own
+    // Solved, or made or attached since the job: these follow the newest's correction.
+    poses[k] = k <= newest && closure.fragments[k] == 0 ? closure.poses[k] : correction * poses[k];
   }
   // Edges added since the job (odometry edges of newer keyframes) follow the solved ones.
   closure.edges.insert(closure.edges.end(),
                        edges.begin() + static_cast<std::ptrdiff_t>(closure.job_edges), edges.end());
   edges = std::move(closure.edges);
-  if (has_last) last_T_W_C = correction * last_T_W_C;
+  if (has_last && current_fragment == 0) last_T_W_C = correction * last_T_W_C;
   loops_closed += closure.loops;
   return closure.loops;
 }
@@ -461,6 +509,7 @@ void RgbdOdometry::Impl::WorkerLoop() {
       jobs.pop_front();
       // The job was queued before the loops applied since: it starts from the current state.
       job.poses.assign(poses.begin(), poses.begin() + job.newest + 1);
+      job.fragments.assign(fragment_of.begin(), fragment_of.begin() + job.newest + 1);
       job.edges = edges;
       busy = true;
     }
@@ -492,7 +541,7 @@ void RgbdOdometry::Impl::StopWorker() {
 }
 
 std::vector<int> RgbdOdometry::Impl::LookAlikeKeyframes(const FrameFeatures& features, int count,
-                                                        const std::vector<int>& skip) {
+                                                        const std::function<bool(int)>& eligible) {
   if (count <= 0) return {};
   IndexKeyframes(keyframes, static_cast<int>(keyframes.size()) - 1, &relocalisation_index,
                  &relocalisation_indexed);
@@ -505,7 +554,7 @@ std::vector<int> RgbdOdometry::Impl::LookAlikeKeyframes(const FrameFeatures& fea
                                       static_cast<int>(keyframes.size()) - 1, shortlist_size)) {
     shortlist.push_back(k);
   }
-  return MostMatched(mine, shortlist, skip, keyframes, config.match_ratio, config.min_inliers,
+  return MostMatched(mine, shortlist, eligible, keyframes, config.match_ratio, config.min_inliers,
                      count);
 }
 
@@ -564,8 +613,53 @@ void RgbdOdometry::Impl::AddKeyframe(const FrameFeatures& features,
     const std::lock_guard<std::mutex> lock(mutex);
     keyframes.push_back(std::move(made));
     poses.push_back(T_W_C);
+    fragment_of.push_back(current_fragment);
   }
   current_keyframe = static_cast<int>(keyframes.size()) - 1;
+}
+
+bool RgbdOdometry::Impl::StartFragment(const FrameFeatures& features) {
+  const auto with_depth = std::count(features.valid.begin(), features.valid.end(), std::uint8_t{1});
+  if (with_depth < config.min_inliers) return false;
+  current_fragment = ++fragments_started;
+  AddKeyframe(features, Eigen::Isometry3d::Identity());
+  has_last = true;
+  last_tracked = true;
+  last_T_W_C = Eigen::Isometry3d::Identity();
+  return true;
+}
+
+bool RgbdOdometry::Impl::Strong(const PoseFit& fit) const {
+  return fit.ok && fit.inliers >= config.relocalisation_min_inliers &&
+         (!config.depth_refinement || fit.depth_refined);
+}
+
+bool RgbdOdometry::Impl::AttachFragment(const FrameFeatures& features, const CameraIntrinsics& K,
+                                        const Eigen::Isometry3d& T_F_C, Eigen::Isometry3d* T_W_C,
+                                        PoseFit* fit, int* reference) {
+  auto in_map_frame = [&](int k) { return fragment_of[static_cast<std::size_t>(k)] == 0; };
+  for (const int k :
+       LookAlikeKeyframes(features, config.relocalisation_appearance_candidates, in_map_frame)) {
+    PoseFit candidate = Fit(features, *keyframes[static_cast<std::size_t>(k)], K);
+    if (!Strong(candidate)) continue;
+    *T_W_C = poses[static_cast<std::size_t>(k)] * candidate.T_K_C;
+    const Eigen::Isometry3d T_W_F = *T_W_C * T_F_C.inverse();
+    {
+      const std::lock_guard<std::mutex> lock(mutex);
+      for (std::size_t j = 0; j < poses.size(); ++j) {
+        if (fragment_of[j] != current_fragment) continue;
+        poses[j] = T_W_F * poses[j];
+        fragment_of[j] = 0;
+      }
+    }
+    current_fragment = 0;
+    ++fragments_attached;
+    last_T_W_C = T_W_F * last_T_W_C;
+    *fit = std::move(candidate);
+    *reference = k;
+    return true;
+  }
+  return false;
 }
 
 bool RgbdOdometry::Impl::Start(const FrameFeatures& features, const Eigen::Isometry3d& T_W_C,
@@ -779,10 +873,7 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
 
   // Without a recent tracked pose, the camera may be anywhere: every fit must be strong.
   const bool strict = !impl.has_last || !impl.last_tracked;
-  auto strong = [&](const PoseFit& candidate) {
-    return candidate.ok && candidate.inliers >= config.relocalisation_min_inliers &&
-           (!config.depth_refinement || candidate.depth_refined);
-  };
+  auto strong = [&](const PoseFit& candidate) { return impl.Strong(candidate); };
   PoseFit fit = impl.Fit(*features, *impl.keyframes[static_cast<std::size_t>(impl.current_keyframe)],
                          frame.intrinsics);
   std::string implausible;
@@ -798,10 +889,14 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
   report.reference_keyframe = impl.current_keyframe;
   report.status = TrackingStatus::kTracked;
   if (!accepted) {
-    // Relocalisation: the other keyframes, nearest to the last known pose first.
+    // Relocalisation: the other keyframes of the current fragment (poses in other frames do
+    // not compare), nearest to the last known pose first.
+    auto in_current_fragment = [&](int k) {
+      return impl.fragment_of[static_cast<std::size_t>(k)] == impl.current_fragment;
+    };
     std::vector<int> order;
     for (int k = 0; k < static_cast<int>(impl.keyframes.size()); ++k) {
-      if (k != impl.current_keyframe) order.push_back(k);
+      if (k != impl.current_keyframe && in_current_fragment(k)) order.push_back(k);
     }
     std::sort(order.begin(), order.end(), [&](int a, int b) {
       return (pose_of(a).translation() - impl.last_T_W_C.translation()).norm() <
@@ -810,13 +905,17 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
     if (static_cast<int>(order.size()) > config.relocalisation_keyframes) {
       order.resize(static_cast<std::size_t>(config.relocalisation_keyframes));
     }
-    // Then those that look like the frame, wherever they are: only these can place a camera
-    // that starts far from the last pose.
+    // Then those that look like the frame, wherever they are, in the map's frame or the
+    // current fragment's: only these can place a camera that starts far from the last pose.
     std::vector<int> tried = order;
     tried.push_back(impl.current_keyframe);
     const std::size_t by_distance = order.size();
-    for (int k : impl.LookAlikeKeyframes(*features, config.relocalisation_appearance_candidates,
-                                         tried)) {
+    auto untried = [&](int k) {
+      return (impl.fragment_of[static_cast<std::size_t>(k)] == 0 || in_current_fragment(k)) &&
+             std::find(tried.begin(), tried.end(), k) == tried.end();
+    };
+    for (int k :
+         impl.LookAlikeKeyframes(*features, config.relocalisation_appearance_candidates, untried)) {
       order.push_back(k);
     }
     const std::string first_failure = fit.ok ? implausible : fit.why;
@@ -833,17 +932,62 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
         report.reference_keyframe = k;
         report.status = TrackingStatus::kRelocalized;
         impl.current_keyframe = k;
+        // Placed in the map's frame from a provisional fragment, against a keyframe of the map:
+        // this frame's pose in the fragment is not known, so the fragment stays apart.
+        impl.current_fragment = impl.fragment_of[static_cast<std::size_t>(k)];
         break;
       }
     }
     if (!accepted) {
-      report.status = TrackingStatus::kLost;
       report.matches = fit.matches;
       report.inliers = fit.inliers;
       report.why = first_failure;
       impl.has_last = false;  // the motion check needs a recent pose
+      if (config.provisional_fragments && impl.StartFragment(*features)) {
+        report.status = TrackingStatus::kProvisional;
+        report.fragment = impl.current_fragment;
+        report.T_W_C = Eigen::Isometry3d::Identity();
+        report.new_keyframe = true;
+        report.reference_keyframe = impl.current_keyframe;
+        return finish();
+      }
+      report.status = TrackingStatus::kLost;
       return finish();
     }
+  }
+  // Tracked in a provisional fragment: placed in the map when a map keyframe fits strongly.
+  if (impl.current_fragment != 0) {
+    const Eigen::Isometry3d T_F_C = pose_of(report.reference_keyframe) * fit.T_K_C;
+    const int fragment = impl.current_fragment;
+    Eigen::Isometry3d T_W_C;
+    PoseFit placement;
+    int map_keyframe = -1;
+    if (impl.AttachFragment(*features, frame.intrinsics, T_F_C, &T_W_C, &placement,
+                            &map_keyframe)) {
+      report.attached_fragment = fragment;
+      report.status = TrackingStatus::kRelocalized;
+      // The frame becomes a keyframe tied to both: its fragment's keyframe (odometry edge) and
+      // the map's keyframe that placed it, so that the graph stays one.
+      const int fragment_keyframe = report.reference_keyframe;
+      impl.AddKeyframe(*features, T_W_C);
+      impl.AddOdometryEdge(fragment_keyframe, impl.current_keyframe, impl.EdgeInformationOf(fit));
+      impl.AddOdometryEdge(map_keyframe, impl.current_keyframe, impl.EdgeInformationOf(placement));
+      report.new_keyframe = true;
+      report.reference_keyframe = impl.current_keyframe;
+      report.T_W_C = T_W_C;
+      report.matches = placement.matches;
+      report.inliers = placement.inliers;
+      report.reprojection_rmse_px = placement.rmse_px;
+      report.depth_refined = placement.depth_refined;
+      report.depth_rmse_m = placement.depth_rmse_m;
+      impl.has_last = true;
+      impl.last_tracked = true;
+      impl.last_T_W_C = T_W_C;
+      return finish();
+    }
+    report.status = TrackingStatus::kProvisional;
+    report.fragment = fragment;
+    report.why = "not placed in the map yet: no keyframe of the map fits the frame strongly";
   }
   const Eigen::Isometry3d T_W_C = pose_of(report.reference_keyframe) * fit.T_K_C;
   report.T_W_C = T_W_C;
@@ -865,7 +1009,8 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
   report.new_keyframe = true;
   report.reference_keyframe = impl.current_keyframe;
   impl.AddOdometryEdge(reference_keyframe, impl.current_keyframe, impl.EdgeInformationOf(fit));
-  if (config.loop_candidates <= 0) return finish();
+  // Loops are closed in the map's frame only; a provisional fragment has none to close.
+  if (config.loop_candidates <= 0 || impl.current_fragment != 0) return finish();
   if (config.background_loop_closure) {
     {
       const std::lock_guard<std::mutex> lock(impl.mutex);
@@ -909,6 +1054,14 @@ int RgbdOdometry::FinishLoopClosure() {
 Eigen::Isometry3d RgbdOdometry::KeyframePose(int keyframe) const {
   return impl_->poses.at(static_cast<std::size_t>(keyframe));
 }
+
+int RgbdOdometry::KeyframeFragment(int keyframe) const {
+  return impl_->fragment_of.at(static_cast<std::size_t>(keyframe));
+}
+
+int RgbdOdometry::fragments_started() const { return impl_->fragments_started; }
+
+int RgbdOdometry::fragments_attached() const { return impl_->fragments_attached; }
 
 int RgbdOdometry::loops_closed() const { return impl_->loops_closed; }
 

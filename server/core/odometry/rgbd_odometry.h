@@ -102,6 +102,14 @@ struct OdometryConfig {
   /// PnP inliers and, with depth_refinement, the dense step agreeing with the features (a wrong
   /// place that shares a few features with the frame rarely passes both).
   int relocalisation_min_inliers = 60;
+  /// A frame that can be neither tracked nor placed in the map (a session starting where its
+  /// first views share too little with the map's, tracking lost mid-session) starts a
+  /// provisional fragment: it and the frames after it are tracked among themselves in a frame of
+  /// their own (TrackingStatus::kProvisional), and every frame of the fragment is tried against
+  /// the map's keyframes by appearance (the strict test above). The first that is placed attaches
+  /// the fragment: each of its keyframes moves into the map's frame, nothing is dropped. A
+  /// fragment of a place the map does not hold stays apart. Off: such frames are kLost.
+  bool provisional_fragments = true;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
@@ -110,7 +118,10 @@ enum class TrackingStatus {
   kInitialized,  ///< the first frame: the world frame is its camera frame
   kTracked,      ///< pose found against the current keyframe
   kRelocalized,  ///< pose found against another keyframe after tracking failed
-  kLost,         ///< no pose: `why` says what failed
+  /// Pose found, but in a provisional fragment's frame (`fragment` > 0), not yet placed in the
+  /// map's (OdometryConfig::provisional_fragments); T_W_C is in that frame.
+  kProvisional,
+  kLost,  ///< no pose: `why` says what failed
 };
 
 /// What tracking one frame found.
@@ -132,7 +143,12 @@ struct TrackingReport {
   /// unless they ran in the background.
   double loop_ms = 0.0;
   double ms = 0.0;                    ///< time spent
-  std::string why;                    ///< kLost: the reason
+  /// The frame T_W_C is in: 0 the map's, > 0 a provisional fragment's (kProvisional).
+  int fragment = 0;
+  /// This frame placed provisional fragment `attached_fragment` (> 0) in the map: every keyframe
+  /// of it moved into the map's frame (KeyframePose), and T_W_C is the map's. -1: none.
+  int attached_fragment = -1;
+  std::string why;  ///< kLost: the reason; kProvisional: why not placed
 };
 
 /// Thread-safety: none (one camera, one thread); with background_loop_closure a thread of its
@@ -168,8 +184,13 @@ class RgbdOdometry {
   int FinishLoopClosure();
 
   [[nodiscard]] int num_keyframes() const;
-  /// The keyframe's current pose (moved by every loop closure).
+  /// The keyframe's current pose (moved by every loop closure and by its fragment's attachment).
   [[nodiscard]] Eigen::Isometry3d KeyframePose(int keyframe) const;
+  /// The frame the keyframe's pose is in: 0 the map's, > 0 a provisional fragment not attached.
+  [[nodiscard]] int KeyframeFragment(int keyframe) const;
+  /// Provisional fragments started and, of them, those attached to the map so far.
+  [[nodiscard]] int fragments_started() const;
+  [[nodiscard]] int fragments_attached() const;
   [[nodiscard]] int loops_closed() const;
   /// The pose graph's edges between keyframes (node = keyframe index): odometry and the loops
   /// kept, so that a caller can add constraints of its own (ConstrainTrajectory).

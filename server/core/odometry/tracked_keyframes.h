@@ -19,6 +19,12 @@ class TrackedKeyframes {
                         odometry.KeyframePose(report.reference_keyframe).inverse() * report.T_W_C};
   }
 
+  /// Map keyframe `id`, `T_K_C` from odometry keyframe `keyframe` (a keyframe held while its
+  /// fragment was provisional: where it lies on its keyframe does not change with the frame).
+  void AddRelative(KeyframeId id, int keyframe, const Eigen::Isometry3d& T_K_C) {
+    on_keyframe_[id] = {keyframe, T_K_C};
+  }
+
   /// Every map keyframe's pose as the odometry's keyframes now stand.
   [[nodiscard]] std::map<KeyframeId, Eigen::Isometry3d> Poses(const RgbdOdometry& odometry) const {
     std::map<KeyframeId, Eigen::Isometry3d> poses;
