@@ -284,10 +284,18 @@ struct RgbdOdometry::Impl {
   // say against which keyframe.
   bool AttachFragment(const FrameFeatures& features, const CameraIntrinsics& K,
                       const Eigen::Isometry3d& T_F_C, Eigen::Isometry3d* T_W_C, PoseFit* fit,
-                      int* reference);
+                      int* reference, std::string* why);
   // A fit strong enough to place a camera that may be anywhere (relocalisation_min_inliers, the
   // dense step agreeing with the features).
   bool Strong(const PoseFit& fit) const;
+  // A frame's fit against one keyframe, for a placement by several.
+  struct Vote {
+    int keyframe = -1;
+    PoseFit fit;
+  };
+  // Of `votes` (ok fits of one frame), the strongest Strong one, unless another places the camera
+  // farther than the consensus limits from it (then -1 and `why`); -1 without a Strong one.
+  int Consensus(const std::vector<Vote>& votes, std::string* why) const;
   // The first keyframe, at T_W_C: tracking starts from it. False when too few keypoints have
   // depth.
   bool Start(const FrameFeatures& features, const Eigen::Isometry3d& T_W_C, std::string* why);
@@ -413,19 +421,49 @@ LoopClosure RgbdOdometry::Impl::CloseLoops(const LoopJob& job) {
   }
   for (int k : AppearanceCandidates(job, candidates)) candidates.push_back(k);
   std::vector<PoseGraphEdge> edges = job.edges;
-  int added = 0;
+  std::vector<std::pair<int, PoseFit>> loops;
   for (const int k : candidates) {
-    const PoseFit fit = Fit(*job.features, *job.keyframes[static_cast<std::size_t>(k)],
-                            job.intrinsics);
-    if (!fit.ok || fit.inliers < config.loop_min_inliers) continue;
-    PoseGraphEdge loop;
-    loop.from = k;
-    loop.to = newest;
-    loop.T_from_to = fit.T_K_C;
-    loop.information = EdgeInformationOf(fit);
-    loop.loop = true;
-    edges.push_back(loop);
-    ++added;
+    PoseFit fit = Fit(*job.features, *job.keyframes[static_cast<std::size_t>(k)], job.intrinsics);
+    if (fit.ok && fit.inliers >= config.loop_min_inliers) loops.emplace_back(k, std::move(fit));
+  }
+  // Loops to the saved map's keyframes must agree on where the newest keyframe is (within the
+  // relocalisation consensus limits): a repeated pattern fits strongly at a wrong place, and a
+  // wrong loop to keyframes held fixed would pull the whole session there (the graph's robust
+  // loss sorts out the session's own loops). The largest group that agrees with one of them is
+  // kept; without one larger than the others, none.
+  auto implied = [&](const std::pair<int, PoseFit>& loop) {
+    return job.poses[static_cast<std::size_t>(loop.first)] * loop.second.T_K_C;
+  };
+  auto agree = [&](const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+    const Eigen::Isometry3d apart = a.inverse() * b;
+    return apart.translation().norm() <= config.relocalisation_consensus_m &&
+           AngleDeg(apart.linear()) <= config.relocalisation_consensus_deg;
+  };
+  std::vector<int> support(loops.size(), 0);
+  for (std::size_t a = 0; a < loops.size(); ++a) {
+    for (std::size_t b = 0; b < loops.size(); ++b)
+      support[a] += agree(implied(loops[a]), implied(loops[b]));
+  }
+  const bool to_map = std::any_of(loops.begin(), loops.end(),
+                                  [&](const auto& loop) { return loop.first < map_keyframes; });
+  if (!to_map) std::fill(support.begin(), support.end(), static_cast<int>(loops.size()));
+  int added = 0;
+  if (!loops.empty()) {
+    const auto best = static_cast<std::size_t>(std::max_element(support.begin(), support.end()) -
+                                               support.begin());
+    const bool unique = std::count(support.begin(), support.end(), support[best]) ==
+                        support[best];  // the best group is one group
+    for (std::size_t l = 0; l < loops.size() && unique; ++l) {
+      if (to_map && !agree(implied(loops[best]), implied(loops[l]))) continue;
+      PoseGraphEdge loop;
+      loop.from = loops[l].first;
+      loop.to = newest;
+      loop.T_from_to = loops[l].second.T_K_C;
+      loop.information = EdgeInformationOf(loops[l].second);
+      loop.loop = true;
+      edges.push_back(loop);
+      ++added;
+    }
   }
   if (added == 0) return finish();
   // The graph of the keyframes in the map's frame: a provisional fragment's are tied to it by
@@ -634,14 +672,53 @@ bool RgbdOdometry::Impl::Strong(const PoseFit& fit) const {
          (!config.depth_refinement || fit.depth_refined);
 }
 
+int RgbdOdometry::Impl::Consensus(const std::vector<Vote>& votes, std::string* why) const {
+  int best = -1;
+  for (std::size_t v = 0; v < votes.size(); ++v) {
+    if (Strong(votes[v].fit) &&
+        (best < 0 || votes[v].fit.inliers > votes[static_cast<std::size_t>(best)].fit.inliers)) {
+      best = static_cast<int>(v);
+    }
+  }
+  if (best < 0) return -1;
+  const Vote& chosen = votes[static_cast<std::size_t>(best)];
+  const auto fragment = fragment_of[static_cast<std::size_t>(chosen.keyframe)];
+  const Eigen::Isometry3d T_W_C =
+      poses[static_cast<std::size_t>(chosen.keyframe)] * chosen.fit.T_K_C;
+  for (const Vote& vote : votes) {
+    if (fragment_of[static_cast<std::size_t>(vote.keyframe)] != fragment) continue;
+    const Eigen::Isometry3d apart =
+        T_W_C.inverse() * poses[static_cast<std::size_t>(vote.keyframe)] * vote.fit.T_K_C;
+    if (apart.translation().norm() > config.relocalisation_consensus_m ||
+        AngleDeg(apart.linear()) > config.relocalisation_consensus_deg) {
+      char text[200];
+      std::snprintf(text, sizeof(text),
+                    "keyframes %d and %d place the camera %.1f cm and %.1f deg apart (a repeated "
+                    "pattern?): not placed",
+                    chosen.keyframe, vote.keyframe, 100.0 * apart.translation().norm(),
+                    AngleDeg(apart.linear()));
+      *why = text;
+      return -1;
+    }
+  }
+  return best;
+}
+
 bool RgbdOdometry::Impl::AttachFragment(const FrameFeatures& features, const CameraIntrinsics& K,
                                         const Eigen::Isometry3d& T_F_C, Eigen::Isometry3d* T_W_C,
-                                        PoseFit* fit, int* reference) {
+                                        PoseFit* fit, int* reference, std::string* why) {
   auto in_map_frame = [&](int k) { return fragment_of[static_cast<std::size_t>(k)] == 0; };
+  std::vector<Vote> votes;
   for (const int k :
        LookAlikeKeyframes(features, config.relocalisation_appearance_candidates, in_map_frame)) {
     PoseFit candidate = Fit(features, *keyframes[static_cast<std::size_t>(k)], K);
-    if (!Strong(candidate)) continue;
+    if (candidate.ok) votes.push_back({k, std::move(candidate)});
+  }
+  std::string conflict;
+  const int chosen = Consensus(votes, &conflict);
+  if (chosen >= 0) {
+    const int k = votes[static_cast<std::size_t>(chosen)].keyframe;
+    PoseFit& candidate = votes[static_cast<std::size_t>(chosen)].fit;
     *T_W_C = poses[static_cast<std::size_t>(k)] * candidate.T_K_C;
     const Eigen::Isometry3d T_W_F = *T_W_C * T_F_C.inverse();
     {
@@ -659,6 +736,9 @@ bool RgbdOdometry::Impl::AttachFragment(const FrameFeatures& features, const Cam
     *reference = k;
     return true;
   }
+  *why = !conflict.empty() ? conflict
+         : votes.empty()   ? "no keyframe of the map fits the frame"
+                           : "no keyframe of the map fits the frame strongly";
   return false;
 }
 
@@ -877,8 +957,12 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
   PoseFit fit = impl.Fit(*features, *impl.keyframes[static_cast<std::size_t>(impl.current_keyframe)],
                          frame.intrinsics);
   std::string implausible;
-  bool accepted = fit.ok && plausible(pose_of(impl.current_keyframe) * fit.T_K_C, &implausible) &&
-                  (!strict || strong(fit));
+  // Without a recent pose the fit is a vote among several keyframes' (Consensus), not accepted
+  // alone.
+  bool accepted =
+      fit.ok && plausible(pose_of(impl.current_keyframe) * fit.T_K_C, &implausible) && !strict;
+  std::vector<Impl::Vote> votes;
+  if (strict && fit.ok) votes.push_back({impl.current_keyframe, fit});
   if (fit.ok && strict && !strong(fit)) {
     fit.why = std::to_string(fit.inliers) + " PnP inliers" +
               (config.depth_refinement && !fit.depth_refined ? " without a dense alignment" : "") +
@@ -918,16 +1002,34 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
          impl.LookAlikeKeyframes(*features, config.relocalisation_appearance_candidates, untried)) {
       order.push_back(k);
     }
-    const std::string first_failure = fit.ok ? implausible : fit.why;
+    std::string first_failure = fit.ok ? implausible : fit.why;
+    // After a loss the last pose may be old: only the fits themselves are checked. Where no
+    // recent motion or nearness vouches for them, every keyframe tried votes and the strongest
+    // fit places the camera only if none of the others places it elsewhere.
     for (std::size_t i = 0; i < order.size(); ++i) {
       const int k = order[i];
       PoseFit candidate =
           impl.Fit(*features, *impl.keyframes[static_cast<std::size_t>(k)], frame.intrinsics);
-      // After a loss the last pose may be old: only the fit itself is checked, and strictly
-      // where no recent motion or nearness vouches for it.
       const bool must_be_strong = strict || i >= by_distance;
-      if (candidate.ok && (!must_be_strong || strong(candidate))) {
-        fit = candidate;
+      if (!candidate.ok) continue;
+      if (must_be_strong) {
+        votes.push_back({k, std::move(candidate)});
+        continue;
+      }
+      fit = std::move(candidate);
+      accepted = true;
+      report.reference_keyframe = k;
+      report.status = TrackingStatus::kRelocalized;
+      impl.current_keyframe = k;
+      break;
+    }
+    if (!accepted && !votes.empty()) {
+      std::string conflict;
+      const int chosen = impl.Consensus(votes, &conflict);
+      if (!conflict.empty()) first_failure = conflict;
+      if (chosen >= 0) {
+        const int k = votes[static_cast<std::size_t>(chosen)].keyframe;
+        fit = std::move(votes[static_cast<std::size_t>(chosen)].fit);
         accepted = true;
         report.reference_keyframe = k;
         report.status = TrackingStatus::kRelocalized;
@@ -935,7 +1037,6 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
         // Placed in the map's frame from a provisional fragment, against a keyframe of the map:
         // this frame's pose in the fragment is not known, so the fragment stays apart.
         impl.current_fragment = impl.fragment_of[static_cast<std::size_t>(k)];
-        break;
       }
     }
     if (!accepted) {
@@ -962,8 +1063,9 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
     Eigen::Isometry3d T_W_C;
     PoseFit placement;
     int map_keyframe = -1;
-    if (impl.AttachFragment(*features, frame.intrinsics, T_F_C, &T_W_C, &placement,
-                            &map_keyframe)) {
+    std::string not_placed;
+    if (impl.AttachFragment(*features, frame.intrinsics, T_F_C, &T_W_C, &placement, &map_keyframe,
+                            &not_placed)) {
       report.attached_fragment = fragment;
       report.status = TrackingStatus::kRelocalized;
       // The frame becomes a keyframe tied to both: its fragment's keyframe (odometry edge) and
@@ -987,7 +1089,7 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
     }
     report.status = TrackingStatus::kProvisional;
     report.fragment = fragment;
-    report.why = "not placed in the map yet: no keyframe of the map fits the frame strongly";
+    report.why = not_placed;
   }
   const Eigen::Isometry3d T_W_C = pose_of(report.reference_keyframe) * fit.T_K_C;
   report.T_W_C = T_W_C;

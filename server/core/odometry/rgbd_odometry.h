@@ -102,6 +102,13 @@ struct OdometryConfig {
   /// PnP inliers and, with depth_refinement, the dense step agreeing with the features (a wrong
   /// place that shares a few features with the frame rarely passes both).
   int relocalisation_min_inliers = 60;
+  /// ... and every other keyframe that fits the frame (min_inliers) agreeing with the strongest
+  /// within these: a repeated pattern (identical objects in a row, along a wall that leaves the
+  /// depth free in that direction) fits strongly at a wrong place, but other keyframes then
+  /// place the camera elsewhere (synthetic revisits: wrong placements 6-15 cm from each other's;
+  /// redkitchen's correct ones within 2-3 cm, the reference poses' own disagreement).
+  double relocalisation_consensus_m = 0.05;
+  double relocalisation_consensus_deg = 5.0;
   /// A frame that can be neither tracked nor placed in the map (a session starting where its
   /// first views share too little with the map's, tracking lost mid-session) starts a
   /// provisional fragment: it and the frames after it are tracked among themselves in a frame of
