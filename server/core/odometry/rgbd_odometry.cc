@@ -155,11 +155,15 @@ bool OdometryConfig::IsValid(std::string* why) const {
   if (!(max_step_m > 0.0) || !(max_step_deg > 0.0) || !(keyframe_distance_m > 0.0) ||
       !(keyframe_angle_deg > 0.0) || keyframe_min_inliers < min_inliers ||
       relocalisation_keyframes < 0 || relocalisation_appearance_candidates < 0 ||
-      relocalisation_min_inliers < min_inliers) {
+      relocalisation_min_inliers < min_inliers ||
+      relocalisation_corroborated_min_inliers < min_inliers ||
+      relocalisation_corroborated_min_inliers > relocalisation_min_inliers ||
+      !(relocalisation_consensus_m > 0.0) || !(relocalisation_consensus_deg > 0.0)) {
     *why =
         "odometry: step and keyframe limits must be positive, keyframe_min_inliers >= "
         "min_inliers, relocalisation_keyframes and relocalisation_appearance_candidates >= 0 "
-        "and relocalisation_min_inliers >= min_inliers";
+        "relocalisation_min_inliers >= relocalisation_corroborated_min_inliers >= min_inliers "
+        "and the relocalisation consensus limits positive";
     return false;
   }
   if (!(edge_sigma_m > 0.0) || !(edge_sigma_deg > 0.0) || !(edge_feature_sigma_m > 0.0) ||
@@ -293,9 +297,16 @@ struct RgbdOdometry::Impl {
     int keyframe = -1;
     PoseFit fit;
   };
-  // Of `votes` (ok fits of one frame), the strongest Strong one, unless another places the camera
-  // farther than the consensus limits from it (then -1 and `why`); -1 without a Strong one.
+  // Of `votes` (ok fits of one frame), the one with the most inliers that is strong alone
+  // (relocalisation_min_inliers) or corroborated (relocalisation_corroborated_min_inliers and
+  // another vote agreeing), unless another vote places the camera farther than the consensus
+  // limits from it (then -1 and `why`); -1 without one.
   int Consensus(const std::vector<Vote>& votes, std::string* why) const;
+  // Consensus, and if it places the camera, again with the keyframes nearest that place (up to
+  // relocalisation_keyframes, in its frame) voting too: the keyframes a wrong placement among
+  // look-alikes would skip. Adds their votes to `votes`; returns the index of the chosen one.
+  int ConsensusWithNeighbours(const FrameFeatures& features, const CameraIntrinsics& K,
+                              std::vector<Vote>* votes, std::string* why);
   // The first keyframe, at T_W_C: tracking starts from it. False when too few keypoints have
   // depth.
   bool Start(const FrameFeatures& features, const Eigen::Isometry3d& T_W_C, std::string* why);
@@ -427,43 +438,39 @@ LoopClosure RgbdOdometry::Impl::CloseLoops(const LoopJob& job) {
     if (fit.ok && fit.inliers >= config.loop_min_inliers) loops.emplace_back(k, std::move(fit));
   }
   // Loops to the saved map's keyframes must agree on where the newest keyframe is (within the
-  // relocalisation consensus limits): a repeated pattern fits strongly at a wrong place, and a
-  // wrong loop to keyframes held fixed would pull the whole session there (the graph's robust
-  // loss sorts out the session's own loops). The largest group that agrees with one of them is
-  // kept; without one larger than the others, none.
-  auto implied = [&](const std::pair<int, PoseFit>& loop) {
-    return job.poses[static_cast<std::size_t>(loop.first)] * loop.second.T_K_C;
-  };
+  // relocalisation consensus limits), the tracked pose voting too: a repeated pattern fits
+  // strongly at a wrong place, and a wrong loop to keyframes held fixed would pull the whole
+  // session there (the graph's robust loss sorts out the session's own loops). The loops that
+  // agree with the largest group are kept; without one group larger than the others, none.
+  const bool to_map = std::any_of(loops.begin(), loops.end(),
+                                  [&](const auto& loop) { return loop.first < map_keyframes; });
+  std::vector<Eigen::Isometry3d> voters;  // the loops' poses of the newest keyframe, then its own
+  for (const auto& [k, fit] : loops)
+    voters.push_back(job.poses[static_cast<std::size_t>(k)] * fit.T_K_C);
+  voters.push_back(T_W_new);
   auto agree = [&](const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
     const Eigen::Isometry3d apart = a.inverse() * b;
     return apart.translation().norm() <= config.relocalisation_consensus_m &&
            AngleDeg(apart.linear()) <= config.relocalisation_consensus_deg;
   };
-  std::vector<int> support(loops.size(), 0);
-  for (std::size_t a = 0; a < loops.size(); ++a) {
-    for (std::size_t b = 0; b < loops.size(); ++b)
-      support[a] += agree(implied(loops[a]), implied(loops[b]));
+  std::vector<int> support(voters.size(), 0);
+  for (std::size_t v = 0; v < voters.size(); ++v) {
+    for (const Eigen::Isometry3d& other : voters) support[v] += agree(voters[v], other);
   }
-  const bool to_map = std::any_of(loops.begin(), loops.end(),
-                                  [&](const auto& loop) { return loop.first < map_keyframes; });
-  if (!to_map) std::fill(support.begin(), support.end(), static_cast<int>(loops.size()));
+  const auto best =
+      static_cast<std::size_t>(std::max_element(support.begin(), support.end()) - support.begin());
+  const bool one_group = std::count(support.begin(), support.end(), support[best]) == support[best];
   int added = 0;
-  if (!loops.empty()) {
-    const auto best = static_cast<std::size_t>(std::max_element(support.begin(), support.end()) -
-                                               support.begin());
-    const bool unique = std::count(support.begin(), support.end(), support[best]) ==
-                        support[best];  // the best group is one group
-    for (std::size_t l = 0; l < loops.size() && unique; ++l) {
-      if (to_map && !agree(implied(loops[best]), implied(loops[l]))) continue;
-      PoseGraphEdge loop;
-      loop.from = loops[l].first;
-      loop.to = newest;
-      loop.T_from_to = loops[l].second.T_K_C;
-      loop.information = EdgeInformationOf(loops[l].second);
-      loop.loop = true;
-      edges.push_back(loop);
-      ++added;
-    }
+  for (std::size_t l = 0; l < loops.size(); ++l) {
+    if (to_map && !(one_group && agree(voters[best], voters[l]))) continue;
+    PoseGraphEdge loop;
+    loop.from = loops[l].first;
+    loop.to = newest;
+    loop.T_from_to = loops[l].second.T_K_C;
+    loop.information = EdgeInformationOf(loops[l].second);
+    loop.loop = true;
+    edges.push_back(loop);
+    ++added;
   }
   if (added == 0) return finish();
   // The graph of the keyframes in the map's frame: a provisional fragment's are tied to it by
@@ -673,10 +680,30 @@ bool RgbdOdometry::Impl::Strong(const PoseFit& fit) const {
 }
 
 int RgbdOdometry::Impl::Consensus(const std::vector<Vote>& votes, std::string* why) const {
+  auto pose_of_vote = [&](const Vote& vote) {
+    return poses[static_cast<std::size_t>(vote.keyframe)] * vote.fit.T_K_C;
+  };
+  auto agree = [&](const Vote& a, const Vote& b) {
+    if (fragment_of[static_cast<std::size_t>(a.keyframe)] !=
+        fragment_of[static_cast<std::size_t>(b.keyframe)]) {
+      return false;
+    }
+    const Eigen::Isometry3d apart = pose_of_vote(a).inverse() * pose_of_vote(b);
+    return apart.translation().norm() <= config.relocalisation_consensus_m &&
+           AngleDeg(apart.linear()) <= config.relocalisation_consensus_deg;
+  };
+  // Strong alone, or nearly so and another keyframe's fit agrees.
   int best = -1;
   for (std::size_t v = 0; v < votes.size(); ++v) {
-    if (Strong(votes[v].fit) &&
-        (best < 0 || votes[v].fit.inliers > votes[static_cast<std::size_t>(best)].fit.inliers)) {
+    const PoseFit& fit = votes[v].fit;
+    if (!fit.ok || (config.depth_refinement && !fit.depth_refined)) continue;
+    bool eligible = fit.inliers >= config.relocalisation_min_inliers;
+    if (!eligible && fit.inliers >= config.relocalisation_corroborated_min_inliers) {
+      for (std::size_t other = 0; other < votes.size() && !eligible; ++other) {
+        eligible = other != v && agree(votes[v], votes[other]);
+      }
+    }
+    if (eligible && (best < 0 || fit.inliers > votes[static_cast<std::size_t>(best)].fit.inliers)) {
       best = static_cast<int>(v);
     }
   }
@@ -704,6 +731,34 @@ int RgbdOdometry::Impl::Consensus(const std::vector<Vote>& votes, std::string* w
   return best;
 }
 
+int RgbdOdometry::Impl::ConsensusWithNeighbours(const FrameFeatures& features,
+                                                const CameraIntrinsics& K, std::vector<Vote>* votes,
+                                                std::string* why) {
+  const int chosen = Consensus(*votes, why);
+  if (chosen < 0) return -1;
+  const Vote& placed = (*votes)[static_cast<std::size_t>(chosen)];
+  const int fragment = fragment_of[static_cast<std::size_t>(placed.keyframe)];
+  const Eigen::Vector3d where =
+      (poses[static_cast<std::size_t>(placed.keyframe)] * placed.fit.T_K_C).translation();
+  std::vector<std::pair<double, int>> near;
+  for (int k = 0; k < static_cast<int>(keyframes.size()); ++k) {
+    if (fragment_of[static_cast<std::size_t>(k)] != fragment) continue;
+    if (std::any_of(votes->begin(), votes->end(), [&](const Vote& v) { return v.keyframe == k; })) {
+      continue;
+    }
+    near.emplace_back((poses[static_cast<std::size_t>(k)].translation() - where).norm(), k);
+  }
+  std::sort(near.begin(), near.end());
+  if (static_cast<int>(near.size()) > config.relocalisation_keyframes) {
+    near.resize(static_cast<std::size_t>(config.relocalisation_keyframes));
+  }
+  for (const auto& [distance, k] : near) {
+    PoseFit fit = Fit(features, *keyframes[static_cast<std::size_t>(k)], K);
+    if (fit.ok) votes->push_back({k, std::move(fit)});
+  }
+  return Consensus(*votes, why);
+}
+
 bool RgbdOdometry::Impl::AttachFragment(const FrameFeatures& features, const CameraIntrinsics& K,
                                         const Eigen::Isometry3d& T_F_C, Eigen::Isometry3d* T_W_C,
                                         PoseFit* fit, int* reference, std::string* why) {
@@ -715,7 +770,7 @@ bool RgbdOdometry::Impl::AttachFragment(const FrameFeatures& features, const Cam
     if (candidate.ok) votes.push_back({k, std::move(candidate)});
   }
   std::string conflict;
-  const int chosen = Consensus(votes, &conflict);
+  const int chosen = ConsensusWithNeighbours(features, K, &votes, &conflict);
   if (chosen >= 0) {
     const int k = votes[static_cast<std::size_t>(chosen)].keyframe;
     PoseFit& candidate = votes[static_cast<std::size_t>(chosen)].fit;
@@ -1025,7 +1080,8 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
     }
     if (!accepted && !votes.empty()) {
       std::string conflict;
-      const int chosen = impl.Consensus(votes, &conflict);
+      const int chosen =
+          impl.ConsensusWithNeighbours(*features, frame.intrinsics, &votes, &conflict);
       if (!conflict.empty()) first_failure = conflict;
       if (chosen >= 0) {
         const int k = votes[static_cast<std::size_t>(chosen)].keyframe;

@@ -102,6 +102,11 @@ struct OdometryConfig {
   /// PnP inliers and, with depth_refinement, the dense step agreeing with the features (a wrong
   /// place that shares a few features with the frame rarely passes both).
   int relocalisation_min_inliers = 60;
+  /// ... or this many when another keyframe's fit (min_inliers) places the camera within the
+  /// consensus limits of it (a view the first session saw from farther or higher shares fewer
+  /// features with each keyframe; synthetic revisits: desk sessions placed 1 of 5 at 60 alone,
+  /// 5 of 5 at 40).
+  int relocalisation_corroborated_min_inliers = 40;
   /// ... and every other keyframe that fits the frame (min_inliers) agreeing with the strongest
   /// within these: a repeated pattern (identical objects in a row, along a wall that leaves the
   /// depth free in that direction) fits strongly at a wrong place, but other keyframes then
