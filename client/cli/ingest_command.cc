@@ -149,9 +149,10 @@ void PrintSummary(const IngestCounts& counts, const v1::IngestSummary& summary, 
   std::cout << "; skipped frames: " << counts.skipped << "\n";
   if (summary.keyframes_untracked() > 0) {
     // With estimated poses: keyframes the server could not place, skipped by it.
-    std::cout << "keyframes the server could not place (not mapped; later ones are placed by "
-                 "relocalisation): "
-              << summary.keyframes_untracked() << "\n";
+    std::cout << "keyframes the server could not place when they came: "
+              << summary.keyframes_untracked() << " (" << summary.keyframes_held()
+              << " held in a provisional part of the session, " << summary.keyframes_attached()
+              << " of them mapped once a later keyframe placed it)\n";
     for (const std::string& reason : summary.untracked()) std::cerr << "  " << reason << "\n";
   }
   std::cout << "objects created: " << summary.objects_created() << "\n"

@@ -61,6 +61,7 @@ void OutcomeToProto(const AddKeyframeOutcome& outcome, v1::AddKeyframeResponse* 
   response->set_loops_closed(outcome.loops_closed);
   response->set_relocalized(outcome.relocalized);
   response->set_session_id(outcome.session_id);
+  for (const KeyframeId id : outcome.attached) response->add_attached_keyframe_ids(id);
   response->mutable_created_objects()->Add(outcome.created.begin(), outcome.created.end());
   response->mutable_updated_objects()->Add(outcome.updated.begin(), outcome.updated.end());
   response->mutable_removed_objects()->Add(outcome.removed.begin(), outcome.removed.end());
@@ -230,7 +231,7 @@ grpc::Status MapServiceImpl::IngestKeyframes(grpc::ServerContext* /*context*/,
     constexpr int kMaxUntrackedReasons = 100;
     int index = 0;  // of the message in the stream
     int added = 0;
-    int untracked = 0;
+    int untracked = 0, held = 0, attached = 0;
     int objects_created = 0;
     std::uint64_t map_version = server_.Snapshot()->version;
     for (; reader->Read(&bytes); ++index) {
@@ -245,6 +246,7 @@ grpc::Status MapServiceImpl::IngestKeyframes(grpc::ServerContext* /*context*/,
       // A keyframe the server cannot place is skipped: a camera's stream goes on past a blank
       // wall or a fast turn, and the next keyframe is placed by relocalisation.
       if (!status.ok() && outcome.untracked) {
+        held += outcome.held;
         if (++untracked <= kMaxUntrackedReasons) {
           summary->add_untracked(StreamPrefix(index, &request) + status.error_message());
         }
@@ -254,13 +256,19 @@ grpc::Status MapServiceImpl::IngestKeyframes(grpc::ServerContext* /*context*/,
         return grpc::Status(status.error_code(),
                             StreamPrefix(index, &request) + status.error_message());
       }
-      if (added == 0) summary->set_first_keyframe_id(outcome.keyframe_id);
+      // Held keyframes this one's placement mapped came before it.
+      const KeyframeId first_id =
+          outcome.attached.empty() ? outcome.keyframe_id : outcome.attached.front();
+      if (added == 0) summary->set_first_keyframe_id(first_id);
       summary->set_last_keyframe_id(outcome.keyframe_id);
       objects_created += static_cast<int>(outcome.created.size());
       map_version = outcome.map_version;
-      ++added;
+      attached += static_cast<int>(outcome.attached.size());
+      added += 1 + static_cast<int>(outcome.attached.size());
     }
     summary->set_keyframes_untracked(untracked);
+    summary->set_keyframes_held(held);
+    summary->set_keyframes_attached(attached);
     summary->set_keyframes_added(added);
     summary->set_objects_created(objects_created);
     summary->set_map_version(map_version);

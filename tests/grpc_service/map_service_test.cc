@@ -208,6 +208,9 @@ TEST_F(MapServiceTest, IngestWithEstimatedPosesSkipsWhatItCannotPlaceAndNamesIt)
   EXPECT_EQ(summary.first_keyframe_id(), 1);
   EXPECT_EQ(summary.last_keyframe_id(), 1);
   EXPECT_EQ(summary.keyframes_untracked(), 2);
+  // Nothing to track in a blank frame: lost, not held in a provisional part.
+  EXPECT_EQ(summary.keyframes_held(), 0);
+  EXPECT_EQ(summary.keyframes_attached(), 0);
   ASSERT_EQ(summary.untracked_size(), 2);
   EXPECT_NE(summary.untracked(0).find("keyframe 0 (blank): blank: tracking lost"),
             std::string::npos)
