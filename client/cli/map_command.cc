@@ -523,6 +523,9 @@ int RunMapCommand(int argc, char** argv) {
     folder.server = objmap_config.map_server;
     const bool estimate = estimate_flag || (estimate_missing_flag && !input.source_has_poses);
     folder.server.pose_source = estimate ? PoseSource::kEstimate : PoseSource::kRequest;
+    // As with --out: the estimate starts at the input's first pose, so that the map and the
+    // input's own poses (and its ground truth) share a frame.
+    folder.server.estimate_from_first_pose = estimate && input.source_has_poses;
     folder.source_has_poses = input.source_has_poses;
     folder.run = run_config;
     // Without poses of its own the input cannot pick keyframes by motion (the server tracks

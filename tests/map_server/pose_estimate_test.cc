@@ -79,6 +79,37 @@ class PoseEstimate : public ::testing::Test {
   std::unique_ptr<SequenceReader> reader_;
 };
 
+// With server.estimate_from_first_pose an empty map starts at the pose its first keyframe
+// carries (a dataset whose poses only score the estimate: the map shares their frame); the poses
+// of later keyframes are still ignored, and each is tracked near the dataset's own.
+TEST_F(PoseEstimate, AnEmptyMapCanStartAtTheFirstKeyframesPose) {
+  if (!OpenSequenceOrSkip()) GTEST_SKIP() << "../shared/data/redkitchen is absent";
+  config_.estimate_from_first_pose = true;
+  auto server = OpenServer();
+  ASSERT_TRUE(server);
+  RgbdFrame first = Keyframe(0);
+  first.T_W_C = Reference(0);
+  AddKeyframeOutcome outcome;
+  ASSERT_TRUE(server->AddKeyframe(first, std::vector<Detection>{}, &outcome).ok());
+  EXPECT_TRUE(outcome.T_W_C.isApprox(Reference(0), 1e-9));
+  for (std::size_t index = 3; index <= 30; index += 3) {
+    ASSERT_TRUE(server->AddKeyframe(Keyframe(index), std::vector<Detection>{}, &outcome).ok())
+        << "frame " << index;  // its pose field holds nonsense, ignored
+    const Eigen::Isometry3d error = Reference(index).inverse() * outcome.T_W_C;
+    EXPECT_LT(error.translation().norm(), 0.05) << "frame " << index;
+  }
+  // A first pose that is not a rigid transform is refused.
+  server.reset();
+  RemoveDatabase();
+  server = OpenServer();
+  ASSERT_TRUE(server);
+  RgbdFrame broken = Keyframe(0);
+  broken.T_W_C.matrix()(0, 0) = 2.0;
+  const ServiceStatus refused = server->AddKeyframe(broken, std::vector<Detection>{}, &outcome);
+  EXPECT_EQ(refused.code, StatusCode::kInvalidArgument) << refused.message;
+  EXPECT_EQ(server->Status().keyframes, 0u);
+}
+
 TEST_F(PoseEstimate, KeyframesWithoutPosesAreTrackedBlankOnesRefusedAndARestartResumes) {
   if (!OpenSequenceOrSkip()) GTEST_SKIP() << "../shared/data/redkitchen is absent";
   std::vector<TrajectoryPose> estimated, reference;

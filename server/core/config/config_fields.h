@@ -145,6 +145,7 @@ void VisitObjmapConfig(ObjmapConfig* c, Visitor& v) {
   v("pose_source", &s.pose_source);
   v("relocalisation_map_keyframes", &s.relocalisation_map_keyframes);
   v("max_held_keyframes", &s.max_held_keyframes);
+  v("estimate_from_first_pose", &s.estimate_from_first_pose);
   // The request limits (RequestLimits) sit beside the server's other bounds.
   v("max_image_pixels", &s.limits.max_image_pixels);
   v("max_detections_per_keyframe", &s.limits.max_detections_per_keyframe);

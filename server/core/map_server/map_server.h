@@ -98,6 +98,11 @@ struct MapServerConfig {
   /// held in memory, detected, until a keyframe of that part is placed, then mapped at their
   /// poses; at most this many in all (the oldest go first). 0: none are held.
   int max_held_keyframes = 200;
+  /// Config key server.estimate_from_first_pose. With kEstimate: the first keyframe of an empty
+  /// map is mapped at the pose it carries (tracking starts there) instead of at the origin, so
+  /// that the map shares the frame of a source whose poses only score the estimate (`objmap map
+  /// --map DIR --poses estimate` on a dataset). Later keyframes' poses are ignored as before.
+  bool estimate_from_first_pose = false;
   /// What one request may ask (config section server: max_image_pixels, ...).
   RequestLimits limits;
   /// How writes and queries share the CPU (config section server: heavy_query_threads, ...).

@@ -17,6 +17,7 @@ ServiceStatus MapServer::AddKeyframe(RgbdFrame frame,
   if (impl_->odometry || session_frame) {
     tracking = std::unique_lock<std::mutex>(impl_->tracking_mutex);
   }
+  const Eigen::Isometry3d given_pose = frame.T_W_C;
   if (impl_->odometry) {
     frame.T_W_C = Eigen::Isometry3d::Identity();  // ours to estimate; only the images are checked
   }
@@ -36,7 +37,27 @@ ServiceStatus MapServer::AddKeyframe(RgbdFrame frame,
     if (!impl_->tracking_blocked.empty()) {
       return {StatusCode::kFailedPrecondition, impl_->tracking_blocked};
     }
-    tracked = impl_->odometry->Track(frame);
+    if (impl_->config.estimate_from_first_pose && impl_->odometry->num_keyframes() == 0) {
+      // An empty map starts at the pose the first keyframe carries.
+      if (!IsValidRigidTransform(given_pose.matrix(), &why)) {
+        return ServiceStatus::Invalid("T_W_C (the map's start, server.estimate_from_first_pose): " +
+                                      why);
+      }
+      RgbdFrame first = frame;
+      first.T_W_C = given_pose;
+      std::string why_not;
+      if (impl_->odometry->StartFromKnownPose(first, &why_not)) {
+        tracked.status = TrackingStatus::kInitialized;
+        tracked.T_W_C = given_pose;
+        tracked.reference_keyframe = 0;
+        tracked.new_keyframe = true;
+      } else {
+        tracked.status = TrackingStatus::kLost;
+        tracked.why = why_not;
+      }
+    } else {
+      tracked = impl_->odometry->Track(frame);
+    }
     const bool hold =
         tracked.status == TrackingStatus::kProvisional && impl_->config.max_held_keyframes > 0;
     if (tracked.status == TrackingStatus::kLost ||
