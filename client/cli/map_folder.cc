@@ -97,7 +97,7 @@ int RunIntoMapFolder(const MapFolderRun& config, FrameStream* stream,
             << started.session.pose_source << "\n";
 
   std::map<KeyframeId, Eigen::Isometry3d> input_poses;
-  int relocalized = 0;
+  int relocalized = 0, attached = 0;
   const KeyframeSink sink = [&](const RgbdFrame& frame, const std::vector<Detection>& detections,
                                 KeyframeResult* result, std::string* reason) {
     AddKeyframeOutcome outcome;
@@ -112,6 +112,9 @@ int RunIntoMapFolder(const MapFolderRun& config, FrameStream* stream,
     result->updated = outcome.updated;
     if (outcome.relocalized) ++relocalized;
     input_poses[outcome.keyframe_id] = frame.T_W_C;
+    // Held keyframes of a provisional part this one placed: mapped now (their input poses are
+    // not at hand here, so they are not scored).
+    attached += static_cast<int>(outcome.attached.size());
     return true;
   };
   SequenceRunReport report;
@@ -132,10 +135,12 @@ int RunIntoMapFolder(const MapFolderRun& config, FrameStream* stream,
   ServiceStatus listed = server->ListKeyframes(0, 0, &keyframes, &version);
   if (!listed.ok()) return Fail(listed.message);
   const ServerStatus after = server->Status();
-  std::cout << "\nsession " << started.session.id << ": " << report.keyframes.size()
+  std::cout << "\nsession " << started.session.id << ": "
+            << report.keyframes.size() + static_cast<std::size_t>(attached)
             << " keyframes mapped of " << report.frames_read << " frames read";
   if (config.server.pose_source == PoseSource::kEstimate) {
-    std::cout << " (" << relocalized << " placed in the saved map by relocalisation)";
+    std::cout << " (" << relocalized << " placed in the saved map by relocalisation, " << attached
+              << " held until a later keyframe placed them)";
   }
   std::cout << "; skipped frames: " << report.skipped.size() << "\n"
             << "the map: " << after.keyframes << " keyframes, " << after.objects << " objects, "
