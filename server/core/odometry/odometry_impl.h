@@ -260,6 +260,8 @@ struct RgbdOdometry::Impl {
   // Dense step after PnP: moves T_K_C when the depth alignment succeeds within the limits.
   void RefineByDepth(const FrameFeatures& features, const Keyframe& keyframe,
                      Eigen::Isometry3d* T_K_C, PoseFit* fit) const;
+  // The frame is tracked at T_W_C by `fit`: the report says so and later frames start there.
+  void Accept(const PoseFit& fit, const Eigen::Isometry3d& T_W_C, TrackingReport* report);
   void AddOdometryEdge(int from, int to, const Eigen::Matrix<double, 6, 6>& information);
   // The information of a fit's T_K_C as an edge (OdometryConfig::edge_information_from_alignment).
   Eigen::Matrix<double, 6, 6> EdgeInformationOf(const PoseFit& fit) const;

@@ -150,7 +150,6 @@ bool RgbdOdometry::Impl::AttachFragment(const FrameFeatures& features, const Cam
     }
     current_fragment = 0;
     ++fragments_attached;
-    last_T_W_C = T_W_F * last_T_W_C;
     *fit = std::move(candidate);
     *reference = k;
     return true;

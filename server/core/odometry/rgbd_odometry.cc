@@ -90,6 +90,19 @@ Eigen::Matrix<double, 6, 6> EdgeInformation(double sigma_m, double sigma_rad) {
 
 }  // namespace
 
+void RgbdOdometry::Impl::Accept(const PoseFit& fit, const Eigen::Isometry3d& T_W_C,
+                                TrackingReport* report) {
+  report->T_W_C = T_W_C;
+  report->matches = fit.matches;
+  report->inliers = fit.inliers;
+  report->reprojection_rmse_px = fit.rmse_px;
+  report->depth_refined = fit.depth_refined;
+  report->depth_rmse_m = fit.depth_rmse_m;
+  has_last = true;
+  last_tracked = true;
+  last_T_W_C = T_W_C;
+}
+
 void RgbdOdometry::Impl::AddOdometryEdge(int from, int to,
                                          const Eigen::Matrix<double, 6, 6>& information) {
   PoseGraphEdge edge;
@@ -498,15 +511,7 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
       impl.AddOdometryEdge(map_keyframe, impl.current_keyframe, impl.EdgeInformationOf(placement));
       report.new_keyframe = true;
       report.reference_keyframe = impl.current_keyframe;
-      report.T_W_C = T_W_C;
-      report.matches = placement.matches;
-      report.inliers = placement.inliers;
-      report.reprojection_rmse_px = placement.rmse_px;
-      report.depth_refined = placement.depth_refined;
-      report.depth_rmse_m = placement.depth_rmse_m;
-      impl.has_last = true;
-      impl.last_tracked = true;
-      impl.last_T_W_C = T_W_C;
+      impl.Accept(placement, T_W_C, &report);
       return finish();
     }
     report.status = TrackingStatus::kProvisional;
@@ -514,15 +519,7 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
     report.why = not_placed;
   }
   const Eigen::Isometry3d T_W_C = pose_of(report.reference_keyframe) * fit.T_K_C;
-  report.T_W_C = T_W_C;
-  report.matches = fit.matches;
-  report.inliers = fit.inliers;
-  report.reprojection_rmse_px = fit.rmse_px;
-  report.depth_refined = fit.depth_refined;
-  report.depth_rmse_m = fit.depth_rmse_m;
-  impl.has_last = true;
-  impl.last_tracked = true;
-  impl.last_T_W_C = T_W_C;
+  impl.Accept(fit, T_W_C, &report);
 
   const bool needs_keyframe = fit.T_K_C.translation().norm() > config.keyframe_distance_m ||
                               AngleDeg(fit.T_K_C.linear()) > config.keyframe_angle_deg ||
