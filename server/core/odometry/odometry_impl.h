@@ -249,6 +249,8 @@ struct RgbdOdometry::Impl {
   // another vote agreeing), unless another vote places the camera farther than the consensus
   // limits from it (then -1 and `why`); -1 without one.
   int Consensus(const std::vector<Vote>& votes, std::string* why) const;
+  // Two poses of one camera `apart` (a^-1 b) within the relocalisation consensus limits.
+  bool WithinConsensus(const Eigen::Isometry3d& apart) const;
   // Consensus, and if it places the camera, again with the keyframes nearest that place (up to
   // relocalisation_keyframes, in its frame) voting too: the keyframes a wrong placement among
   // look-alikes would skip. Adds their votes to `votes`; returns the index of the chosen one.

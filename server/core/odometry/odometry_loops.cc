@@ -96,9 +96,7 @@ LoopClosure RgbdOdometry::Impl::CloseLoops(const LoopJob& job) {
     voters.push_back(job.poses[static_cast<std::size_t>(k)] * fit.T_K_C);
   voters.push_back(T_W_new);
   auto agree = [&](const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
-    const Eigen::Isometry3d apart = a.inverse() * b;
-    return apart.translation().norm() <= config.relocalisation_consensus_m &&
-           AngleDeg(apart.linear()) <= config.relocalisation_consensus_deg;
+    return WithinConsensus(a.inverse() * b);
   };
   std::vector<int> support(voters.size(), 0);
   for (std::size_t v = 0; v < voters.size(); ++v) {

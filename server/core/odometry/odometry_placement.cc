@@ -43,6 +43,11 @@ bool RgbdOdometry::Impl::Strong(const PoseFit& fit) const {
          (!config.depth_refinement || fit.depth_refined);
 }
 
+bool RgbdOdometry::Impl::WithinConsensus(const Eigen::Isometry3d& apart) const {
+  return apart.translation().norm() <= config.relocalisation_consensus_m &&
+         AngleDeg(apart.linear()) <= config.relocalisation_consensus_deg;
+}
+
 int RgbdOdometry::Impl::Consensus(const std::vector<Vote>& votes, std::string* why) const {
   auto pose_of_vote = [&](const Vote& vote) {
     return poses[static_cast<std::size_t>(vote.keyframe)] * vote.fit.T_K_C;
@@ -52,9 +57,7 @@ int RgbdOdometry::Impl::Consensus(const std::vector<Vote>& votes, std::string* w
         fragment_of[static_cast<std::size_t>(b.keyframe)]) {
       return false;
     }
-    const Eigen::Isometry3d apart = pose_of_vote(a).inverse() * pose_of_vote(b);
-    return apart.translation().norm() <= config.relocalisation_consensus_m &&
-           AngleDeg(apart.linear()) <= config.relocalisation_consensus_deg;
+    return WithinConsensus(pose_of_vote(a).inverse() * pose_of_vote(b));
   };
   // Strong alone, or nearly so and another keyframe's fit agrees.
   int best = -1;
@@ -74,14 +77,11 @@ int RgbdOdometry::Impl::Consensus(const std::vector<Vote>& votes, std::string* w
   if (best < 0) return -1;
   const Vote& chosen = votes[static_cast<std::size_t>(best)];
   const auto fragment = fragment_of[static_cast<std::size_t>(chosen.keyframe)];
-  const Eigen::Isometry3d T_W_C =
-      poses[static_cast<std::size_t>(chosen.keyframe)] * chosen.fit.T_K_C;
+  const Eigen::Isometry3d T_W_C = pose_of_vote(chosen);
   for (const Vote& vote : votes) {
     if (fragment_of[static_cast<std::size_t>(vote.keyframe)] != fragment) continue;
-    const Eigen::Isometry3d apart =
-        T_W_C.inverse() * poses[static_cast<std::size_t>(vote.keyframe)] * vote.fit.T_K_C;
-    if (apart.translation().norm() > config.relocalisation_consensus_m ||
-        AngleDeg(apart.linear()) > config.relocalisation_consensus_deg) {
+    const Eigen::Isometry3d apart = T_W_C.inverse() * pose_of_vote(vote);
+    if (!WithinConsensus(apart)) {
       char text[200];
       std::snprintf(text, sizeof(text),
                     "keyframes %d and %d place the camera %.1f cm and %.1f deg apart (a repeated "
