@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <fstream>
 #include <random>
 
@@ -19,9 +20,11 @@ using testing::ExpectSameKeyframe;
 using testing::MakeKeyframe;
 using testing::MakeObservation;
 
-// Turns a file of this version into one of version 2, which had no sessions.
+// Turns a file of this version into one of version 3, which had no revisits ...
+constexpr char kWithoutRevisitsSql[] = "DROP TABLE revisits;";
+// ... and into one of version 2, which had no sessions either.
 constexpr char kWithoutSessionsSql[] =
-    "DROP TABLE sessions; DROP INDEX keyframes_by_session;"
+    "DROP TABLE revisits; DROP TABLE sessions; DROP INDEX keyframes_by_session;"
     " ALTER TABLE keyframes DROP COLUMN session_id;";
 
 class KeyframeStoreRecoveryTest : public testing::StoreTest {
@@ -197,6 +200,59 @@ TEST_F(KeyframeStoreRecoveryTest, MigratesAnEmptySchemaVersion2FileWithoutSessio
   std::vector<SessionSummary> sessions;
   ASSERT_TRUE(store->ListSessions(&sessions, &why)) << why;
   EXPECT_TRUE(sessions.empty());
+}
+
+// A version 3 file (before revisits) keeps its sessions and takes revisits, which a reopen
+// lists; a revisit of a keyframe the file does not hold is refused with nothing committed.
+TEST_F(KeyframeStoreRecoveryTest, MigratesASchemaVersion3FileAndStoresRevisits) {
+  CreateStore(Path(), 2);
+  RunSql(Path(), std::string(kWithoutRevisitsSql) + " PRAGMA user_version = 3;");
+  std::string why;
+  auto store = KeyframeStore::Open(Path(), KeyframeStoreConfig{}, &why);
+  ASSERT_NE(store, nullptr) << why;
+  StoreChange change;
+  change.sessions.push_back({2, "patrol", "estimate", 1.8e9, std::nullopt});
+  StoredRevisit revisit;
+  revisit.session_id = 2;
+  revisit.stamp_s = 42.5;
+  revisit.name = "frame 9";
+  revisit.keyframe_id = 2;
+  revisit.T_K_C.translation() = Eigen::Vector3d(0.01, -0.02, 0.03);
+  revisit.explained_fraction = 0.97f;
+  change.revisit = revisit;
+  ASSERT_TRUE(store->Commit(change, &why)) << why;
+  StoreChange unknown;
+  unknown.revisit = revisit;
+  unknown.revisit->keyframe_id = 99;
+  EXPECT_FALSE(store->Commit(unknown, &why));
+  EXPECT_NE(why.find("unknown keyframe id 99"), std::string::npos) << why;
+  StoreChange not_finite;
+  not_finite.revisit = revisit;
+  not_finite.revisit->stamp_s = std::nan("");
+  EXPECT_FALSE(store->Commit(not_finite, &why));
+  store.reset();
+
+  store = KeyframeStore::Open(Path(), KeyframeStoreConfig{}, &why);
+  ASSERT_NE(store, nullptr) << why;
+  std::vector<StoredRevisit> revisits;
+  ASSERT_TRUE(store->ListRevisits(0, &revisits, &why)) << why;
+  ASSERT_EQ(revisits.size(), 1u);
+  EXPECT_EQ(revisits[0].id, 1);
+  EXPECT_EQ(revisits[0].session_id, 2);
+  EXPECT_EQ(revisits[0].stamp_s, 42.5);
+  EXPECT_EQ(revisits[0].name, "frame 9");
+  EXPECT_EQ(revisits[0].keyframe_id, 2);
+  EXPECT_TRUE(revisits[0].T_K_C.isApprox(revisit.T_K_C));
+  EXPECT_FLOAT_EQ(revisits[0].explained_fraction, 0.97f);
+  ASSERT_TRUE(store->ListRevisits(2, &revisits, &why)) << why;
+  EXPECT_TRUE(revisits.empty());
+  std::vector<SessionSummary> sessions;
+  ASSERT_TRUE(store->ListSessions(&sessions, &why)) << why;
+  ASSERT_EQ(sessions.size(), 2u);
+  EXPECT_EQ(sessions[0].keyframes, 2u);
+  EXPECT_EQ(sessions[0].revisits, 0u);
+  EXPECT_EQ(sessions[1].keyframes, 0u);
+  EXPECT_EQ(sessions[1].revisits, 1u);
 }
 
 TEST_F(KeyframeStoreRecoveryTest, CheckpointRoundTripsAndACorruptOneIsReported) {

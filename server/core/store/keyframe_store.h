@@ -58,10 +58,24 @@ struct StoredSession {
   std::optional<double> ended_s;    ///< absent: still open, or its process ended without closing it
 };
 
+/// A keyframe of a later session that repeated a stored view with nothing changed
+/// (RevisitThinningConfig): not stored as a keyframe, kept as a sighting of that view.
+struct StoredRevisit {
+  std::int64_t id = 0;  ///< assigned by the store, in the order revisits come (0 before)
+  SessionId session_id = 1;
+  double stamp_s = 0.0;  ///< the camera's stamp
+  std::string name;
+  KeyframeId keyframe_id = 0;  ///< the stored keyframe whose view it repeated
+  /// Where the camera was, in that keyframe's camera frame: it follows the keyframe's pose.
+  Eigen::Isometry3d T_K_C = Eigen::Isometry3d::Identity();
+  float explained_fraction = 0.f;  ///< of its depth pixels, by the stored views
+};
+
 /// A stored session with what its keyframes say of it.
 struct SessionSummary {
   StoredSession session;
   std::size_t keyframes = 0;
+  std::size_t revisits = 0;  ///< its keyframes kept as revisits of stored views (StoredRevisit)
   KeyframeId first_keyframe = 0, last_keyframe = 0;  ///< 0 without keyframes
   double first_stamp_s = 0.0, last_stamp_s = 0.0;    ///< camera stamps of those two
 };
@@ -84,13 +98,15 @@ struct StoredObjectSummary {
 
 /// One atomic change of the store: everything a mapping step did. Applied in one transaction:
 /// either all of it is on disk when Commit returns true, or none of it. Applied in this order:
-/// sessions, keyframe, replace_all_objects, observations, merged, removed_objects, object_summaries, poses,
-/// metadata (so observations of this change follow its merges and removals).
+/// sessions, keyframe, revisit, replace_all_objects, observations, merged, removed_objects,
+/// object_summaries, poses, metadata (so observations of this change follow its merges and
+/// removals).
 struct StoreChange {
   /// Sessions inserted or replaced (a keyframe's session is written with its first keyframe;
   /// its end replaces the row), before the keyframe.
   std::vector<StoredSession> sessions;
   std::optional<StoredKeyframe> keyframe;          ///< a new keyframe
+  std::optional<StoredRevisit> revisit;            ///< a new revisit (its id is assigned)
   /// Every stored observation and object summary is deleted first: `observations` and
   /// `object_summaries` then describe all objects (a re-association regrouped them).
   bool replace_all_objects = false;
@@ -178,6 +194,11 @@ class KeyframeStore {
   [[nodiscard]] bool ListKeyframes(KeyframeId first_id, std::size_t max_count,
                                    std::vector<KeyframeSummary>* keyframes, std::string* why) const;
 
+  /// Revisits with id >= `first_id`, ascending. False with a reason when the store cannot be
+  /// read.
+  [[nodiscard]] bool ListRevisits(std::int64_t first_id, std::vector<StoredRevisit>* revisits,
+                                  std::string* why) const;
+
   /// Every stored session, ascending id, with its keyframe count and range. False with a
   /// reason when the store cannot be read.
   [[nodiscard]] bool ListSessions(std::vector<SessionSummary>* sessions, std::string* why) const;
@@ -195,8 +216,8 @@ class KeyframeStore {
 
   [[nodiscard]] const std::string& path() const;
   /// 2 added the occupancy checkpoint, 3 the sessions (a database without them opens with its
-  /// keyframes in session 1); older files are migrated when opened.
-  static constexpr int kSchemaVersion = 3;
+  /// keyframes in session 1), 4 the revisits; older files are migrated when opened.
+  static constexpr int kSchemaVersion = 4;
 
  private:
   KeyframeStore();

@@ -99,6 +99,13 @@ bool CheckChange(const StoreChange& change, std::string* why) {
       return false;
     }
   }
+  if (change.revisit &&
+      (change.revisit->session_id <= 0 || !std::isfinite(change.revisit->stamp_s) ||
+       !IsFinite(change.revisit->T_K_C) || !std::isfinite(change.revisit->explained_fraction))) {
+    *why = "revisit of keyframe " + std::to_string(change.revisit->keyframe_id) +
+           ": its session id must be positive, its stamp, pose and explained share finite";
+    return false;
+  }
   for (const auto& [id, T_W_C] : change.poses) {
     if (!IsFinite(T_W_C)) {
       *why = "pose of keyframe " + std::to_string(id) + " is not finite";
@@ -167,6 +174,23 @@ bool EnsureKeyframeSession(Connection* db, const StoredKeyframe& k, std::string*
   return ensure && ensure->Bind(1, std::int64_t{k.session_id})
                        .Bind(2, "session " + std::to_string(k.session_id))
                        .Run(why);
+}
+
+bool InsertRevisit(Connection* db, const StoredRevisit& r, std::string* why) {
+  const Bytes pose = store_internal::PackPose(r.T_K_C);
+  auto insert = db->Prepare(
+      "INSERT INTO revisits(session_id, stamp_s, name, keyframe_id, T_K_C, explained)"
+      " VALUES (?, ?, ?, ?, ?, ?)",
+      "insert the revisit of keyframe " + std::to_string(r.keyframe_id), why);
+  if (!insert) return false;
+  insert->Bind(1, std::int64_t{r.session_id}).Bind(2, r.stamp_s).Bind(3, r.name);
+  insert->Bind(4, std::int64_t{r.keyframe_id}).BindBlob(5, pose.data(), pose.size());
+  insert->Bind(6, static_cast<double>(r.explained_fraction));
+  if (insert->Run(why)) return true;
+  if (insert->error_code() == SQLITE_CONSTRAINT_FOREIGNKEY) {
+    *why = "revisit of unknown keyframe id " + std::to_string(r.keyframe_id);
+  }
+  return false;
 }
 
 bool InsertObservation(Connection* db, const StoredObservation& o, std::string* why) {
@@ -290,9 +314,9 @@ bool KeyframeStore::Commit(const StoreChange& change, std::string* why) {
     return true;
   };
   const bool ok = db->Exec("BEGIN IMMEDIATE", &reason) && put_sessions() &&
-                  (!change.keyframe ||
-                   (EnsureKeyframeSession(db, *change.keyframe, &reason) &&
-                    InsertKeyframe(db, *change.keyframe, encoded, &reason))) &&
+                  (!change.keyframe || (EnsureKeyframeSession(db, *change.keyframe, &reason) &&
+                                        InsertKeyframe(db, *change.keyframe, encoded, &reason))) &&
+                  (!change.revisit || InsertRevisit(db, *change.revisit, &reason)) &&
                   ApplyObjectChanges(db, change, &reason) &&
                   ApplyPosesAndMeta(db, change, &reason) && db->Exec("COMMIT", &reason);
   if (!ok) {

@@ -256,6 +256,7 @@ bool KeyframeStore::ListSessions(std::vector<SessionSummary>* sessions, std::str
   auto rows = reader.get()->Prepare(
       "SELECT s.id, s.name, s.pose_source, s.started_s, s.ended_s,"
       " (SELECT count(*) FROM keyframes WHERE session_id = s.id),"
+      " (SELECT count(*) FROM revisits WHERE session_id = s.id),"
       " (SELECT min(id) FROM keyframes WHERE session_id = s.id),"
       " (SELECT max(id) FROM keyframes WHERE session_id = s.id),"
       " (SELECT stamp_s FROM keyframes WHERE id ="
@@ -276,12 +277,44 @@ bool KeyframeStore::ListSessions(std::vector<SessionSummary>* sessions, std::str
     if (!rows->IsNull(3)) session.started_s = rows->Double(3);
     if (!rows->IsNull(4)) session.ended_s = rows->Double(4);
     summary.keyframes = static_cast<std::size_t>(rows->Int64(5));
+    summary.revisits = static_cast<std::size_t>(rows->Int64(6));
     if (summary.keyframes > 0) {
-      summary.first_keyframe = rows->Int64(6);
-      summary.last_keyframe = rows->Int64(7);
-      summary.first_stamp_s = rows->Double(8);
-      summary.last_stamp_s = rows->Double(9);
+      summary.first_keyframe = rows->Int64(7);
+      summary.last_keyframe = rows->Int64(8);
+      summary.first_stamp_s = rows->Double(9);
+      summary.last_stamp_s = rows->Double(10);
     }
+  }
+}
+
+bool KeyframeStore::ListRevisits(std::int64_t first_id, std::vector<StoredRevisit>* revisits,
+                                 std::string* why) const {
+  revisits->clear();
+  auto reader = impl_->readers->Acquire(why);
+  if (!reader) return false;
+  auto rows = reader.get()->Prepare(
+      "SELECT id, session_id, stamp_s, name, keyframe_id, T_K_C, explained FROM revisits"
+      " WHERE id >= ? ORDER BY id",
+      "list revisits", why);
+  if (!rows) return false;
+  rows->Bind(1, first_id);
+  for (bool has_row = true;;) {
+    if (!rows->Step(&has_row, why)) return false;
+    if (!has_row) return true;
+    StoredRevisit& revisit = revisits->emplace_back();
+    revisit.id = rows->Int64(0);
+    revisit.session_id = rows->Int64(1);
+    revisit.stamp_s = rows->Double(2);
+    revisit.name = rows->Text(3);
+    revisit.keyframe_id = rows->Int64(4);
+    std::size_t pose_bytes = 0;
+    const std::uint8_t* pose = rows->Blob(5, &pose_bytes);
+    if (!store_internal::UnpackPose(pose, pose_bytes, &revisit.T_K_C)) {
+      *why = impl_->path + ": revisit " + std::to_string(revisit.id) + ": T_K_C blob of " +
+             std::to_string(pose_bytes) + " bytes is not a pose";
+      return false;
+    }
+    revisit.explained_fraction = static_cast<float>(rows->Double(6));
   }
 }
 

@@ -82,11 +82,27 @@ INSERT INTO sessions(id, name, pose_source, started_s, ended_s)
   SELECT 1, 'session 1', '', NULL, NULL WHERE EXISTS (SELECT 1 FROM keyframes);
 )sql";
 
-// kMigrations[v - 1] takes schema version v to v + 1.
-const char* const kMigrations[] = {kSchemaV2Sql, kSchemaV3Sql};
+// Version 4: revisits, the keyframes of a later session that repeated a stored view with
+// nothing changed (RevisitThinningConfig): kept as a sighting of that view, without images.
+const char kSchemaV4Sql[] = R"sql(
+CREATE TABLE revisits(
+  id INTEGER PRIMARY KEY,    -- in the order they came
+  session_id INTEGER NOT NULL,  -- sessions(id)
+  stamp_s REAL NOT NULL,     -- the camera's stamp
+  name TEXT NOT NULL,
+  keyframe_id INTEGER NOT NULL REFERENCES keyframes(id),  -- the stored view it repeated
+  T_K_C BLOB NOT NULL,       -- 16 float64, column-major: the camera in that keyframe's frame
+  explained REAL NOT NULL    -- share of its depth pixels the stored views explained
+);
+CREATE INDEX revisits_by_keyframe ON revisits(keyframe_id, id);
+CREATE INDEX revisits_by_session ON revisits(session_id, id);
+)sql";
 
-const char* const kTables[] = {"meta", "keyframes", "observations", "objects",
-                               "occupancy_checkpoint", "sessions"};
+// kMigrations[v - 1] takes schema version v to v + 1.
+const char* const kMigrations[] = {kSchemaV2Sql, kSchemaV3Sql, kSchemaV4Sql};
+
+const char* const kTables[] = {
+    "meta", "keyframes", "observations", "objects", "occupancy_checkpoint", "sessions", "revisits"};
 
 // Runs the migrations from schema version `from` to this build's.
 bool ApplyMigrations(Connection* db, std::int64_t from, std::string* why) {
