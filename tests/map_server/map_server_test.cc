@@ -348,13 +348,24 @@ TEST_F(MapServerScene, RestartRestoresTheSameMap) {
     EXPECT_FLOAT_EQ(after[i]->confidence, before[i]->confidence);
     EXPECT_LT((after[i]->centroid_W - before[i]->centroid_W).norm(), 1e-4);
   }
-  // New keyframes continue the ids.
+  // The restart's session sees the first view again, unchanged: a revisit of keyframe 1, no
+  // new keyframe (MapServerConfig::thinning).
   RgbdFrame frame = testing::RenderFrame(boxes_, K_, Pose(0), "again");
   AddKeyframeOutcome outcome;
   ASSERT_TRUE(server->AddKeyframe(frame, CupDetections(0), &outcome).ok());
-  EXPECT_EQ(outcome.keyframe_id, 4);
+  EXPECT_EQ(outcome.keyframe_id, 0);
+  EXPECT_EQ(outcome.repeated_keyframe, 1);
   EXPECT_EQ(outcome.map_version, 4u);
-  EXPECT_EQ(outcome.created.size(), 0u);
+  EXPECT_EQ(server->Status().keyframes, 3u);
+  // A keyframe with something new in view (a box put down) is mapped: new keyframes continue
+  // the ids.
+  boxes_.push_back({{0.15, -0.05, 0.70}, {0.27, 0.05, 0.80}, {40, 160, 40}});
+  frame = testing::RenderFrame(boxes_, K_, Pose(0), "changed");
+  ASSERT_TRUE(server->AddKeyframe(frame, CupDetections(0), &outcome).ok());
+  EXPECT_EQ(outcome.keyframe_id, 4);
+  EXPECT_EQ(outcome.repeated_keyframe, 0);
+  EXPECT_EQ(outcome.map_version, 5u);
+  EXPECT_EQ(outcome.created.size(), 1u);  // the box, segmented and never named: unknown
 }
 
 TEST_F(MapServerScene, WithoutCheckpointsARestartIntegratesEveryKeyframeToTheSameOctomap) {

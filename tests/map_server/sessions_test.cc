@@ -31,6 +31,9 @@ class MapServerSessions : public ::testing::Test {
  protected:
   MapServerSessions() : db_path_(TempDatabase("objmap_sessions_")) {
     RemoveDatabase(db_path_);
+    // These sessions map the same views again to follow their bookkeeping: every keyframe is
+    // mapped (revisits_test covers the keyframes kept as revisits instead).
+    config_.thinning.enabled = false;
     boxes_ = {
         {{-0.6, -0.8, 0.60}, {0.6, 0.8, 0.70}, {150, 100, 60}},  // table top
         {{1.5, -2.0, 0.0}, {1.6, 2.0, 2.5}, {220, 220, 220}},    // wall
@@ -62,7 +65,7 @@ class MapServerSessions : public ::testing::Test {
     return sessions;
   }
 
-  const MapServerConfig config_;
+  MapServerConfig config_;
   CameraIntrinsics K_;
   std::vector<testing::SceneBox> boxes_;
   std::string db_path_;

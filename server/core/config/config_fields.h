@@ -158,6 +158,18 @@ void VisitObjmapConfig(ObjmapConfig* c, Visitor& v) {
   v("color_jpeg_quality", &s.store.color_jpeg_quality);
   v("busy_timeout_ms", &s.store.busy_timeout_ms);
   v("synchronous", &s.store.synchronous);
+  RevisitThinningConfig& t = s.thinning;
+  v.Section("thinning");
+  v("enabled", &t.enabled);
+  v("max_distance_m", &t.max_distance_m);
+  v("max_angle_deg", &t.max_angle_deg);
+  v("max_views", &t.max_views);
+  v("pixel_stride", &t.pixel_stride);
+  v("depth_margin_m", &t.depth_margin_m);
+  v("depth_margin_per_m2", &t.depth_margin_per_m2);
+  v("min_explained_fraction", &t.min_explained_fraction);
+  v("max_contradicted_patch_px", &t.max_contradicted_patch_px);
+  v("min_depth_fraction", &t.min_depth_fraction);
   VisitMapper(&s.mapper, v);
   VisitMapModel(&s.mapper, v);
   KeyframeSelectorConfig& k = c->keyframes;

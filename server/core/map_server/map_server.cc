@@ -83,9 +83,21 @@ bool ParsePoseSource(const std::string& name, PoseSource* source) {
   return true;
 }
 
+const char* MapChangeKindName(MapChange::Kind kind) {
+  switch (kind) {
+    case MapChange::Kind::kKeyframeAdded:
+      return "keyframe_added";
+    case MapChange::Kind::kPosesUpdated:
+      return "poses_updated";
+    case MapChange::Kind::kKeyframeRepeated:
+      return "keyframe_repeated";
+  }
+  return "unknown";
+}
+
 bool MapServerConfig::IsValid(std::string* why) const {
-  if (!mapper.IsValid(why) || !store.IsValid(why) || !limits.IsValid(why) ||
-      !fairness.IsValid(why)) {
+  if (!mapper.IsValid(why) || !store.IsValid(why) || !thinning.IsValid(why) ||
+      !limits.IsValid(why) || !fairness.IsValid(why)) {
     return false;
   }
   if (max_queue < 1 || change_history < 1 || max_listed_voxels < 1) {
@@ -197,6 +209,11 @@ bool MapServer::Impl::RestoreFromStore(std::uint64_t* version, std::string* why)
   const bool pose_update_pending = stored.pose_update_pending;
   for (const StoredKeyframe& keyframe : stored.keyframes) {
     snapshot_builder.AddKeyframe(keyframe.id, keyframe.session_id, keyframe.stamp_s);
+  }
+  std::vector<StoredRevisit> revisits;
+  if (!store->ListRevisits(0, &revisits, why)) return false;
+  for (const StoredRevisit& revisit : revisits) {
+    snapshot_builder.AddRevisit(revisit.keyframe_id, revisit.session_id, revisit.stamp_s);
   }
   std::set<KeyframeId> keyframe_ids;
   const RestoreOutcome restored =
@@ -322,8 +339,36 @@ void MapServer::Impl::Publish(std::shared_ptr<const MapSnapshot> next, MapChange
   changes_cv.notify_all();
 }
 
+std::vector<StoredSession> MapServer::Impl::SessionsToStore(const StoredSession& session,
+                                                            std::vector<StoredSession>* ends) {
+  // The session is stored with its first keyframe (or revisit), and the ends of the sessions
+  // before it that are stored.
+  std::vector<StoredSession> sessions;
+  std::lock_guard<std::mutex> lock(session_mutex);
+  if (stored_sessions.count(session.id) == 0) sessions.push_back(session);
+  for (const StoredSession& ended : ended_sessions) {
+    if (stored_sessions.count(ended.id) > 0) ends->push_back(ended);
+  }
+  sessions.insert(sessions.end(), ends->begin(), ends->end());
+  return sessions;
+}
+
+void MapServer::Impl::SessionsStored(SessionId session_id, const std::vector<StoredSession>& ends) {
+  std::lock_guard<std::mutex> lock(session_mutex);
+  stored_sessions.insert(session_id);
+  for (const StoredSession& stored_end : ends) {
+    ended_sessions.erase(
+        std::remove_if(ended_sessions.begin(), ended_sessions.end(),
+                       [&](const StoredSession& s) { return s.id == stored_end.id; }),
+        ended_sessions.end());
+  }
+}
+
 MapJob::Result MapServer::Impl::ApplyKeyframe(MapJob* job) {
   const auto start = Clock::now();
+  if (std::optional<StoredRevisit> revisit = RepeatedView(*job)) {
+    return ApplyRevisit(job, std::move(*revisit));
+  }
   MapJob::Result out;
   KeyframeResult result;
   std::string why;
@@ -343,17 +388,8 @@ MapJob::Result MapServer::Impl::ApplyKeyframe(MapJob* job) {
   change.keyframe = MakeStoredKeyframe(job->frame, job->detections, result.keyframe_id,
                                        *mapper->FindKeyframe(result.keyframe_id));
   change.keyframe->session_id = job->session.id;
-  // The keyframe's session is stored with its first keyframe, and the ends of the sessions
-  // before it that are stored.
   std::vector<StoredSession> ends;
-  {
-    std::lock_guard<std::mutex> lock(session_mutex);
-    if (stored_sessions.count(job->session.id) == 0) change.sessions.push_back(job->session);
-    for (const StoredSession& ended : ended_sessions) {
-      if (stored_sessions.count(ended.id) > 0) ends.push_back(ended);
-    }
-  }
-  change.sessions.insert(change.sessions.end(), ends.begin(), ends.end());
+  change.sessions = SessionsToStore(job->session, &ends);
   change.observations = NewObservations(mapper->objects(), touched, result.keyframe_id);
   change.merged = result.merged;
   for (ObjectId id : touched) {
@@ -379,16 +415,7 @@ MapJob::Result MapServer::Impl::ApplyKeyframe(MapJob* job) {
     std::lock_guard<std::mutex> lock(known_mutex);
     known_keyframes.insert(result.keyframe_id);
   }
-  {
-    std::lock_guard<std::mutex> lock(session_mutex);
-    stored_sessions.insert(job->session.id);
-    for (const StoredSession& stored_end : ends) {
-      ended_sessions.erase(
-          std::remove_if(ended_sessions.begin(), ended_sessions.end(),
-                         [&](const StoredSession& s) { return s.id == stored_end.id; }),
-          ended_sessions.end());
-    }
-  }
+  SessionsStored(job->session.id, ends);
   out.keyframe.session_id = job->session.id;
   snapshot_builder.AddKeyframe(result.keyframe_id, job->session.id, job->frame.stamp_s);
   SnapshotBuilder::Diff diff;

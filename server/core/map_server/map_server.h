@@ -12,6 +12,7 @@
 #include "detection/detector.h"
 #include "map_server/fairness.h"
 #include "map_server/request_limits.h"
+#include "map_server/revisit_thinning.h"
 #include "mapper/mapper.h"
 #include "objects/voxel_model.h"
 #include "occupancy/occupancy_map.h"
@@ -72,6 +73,10 @@ struct MapServerConfig {
   PoseSource pose_source = PoseSource::kRequest;
   OdometryConfig odometry;  ///< with kEstimate, and kSessionFrame's relocalisation
   KeyframeStoreConfig store;
+  /// Keyframes of a later session that repeat a stored view with nothing changed are kept as
+  /// revisits (session, time, pose) instead of being mapped and stored again (config section
+  /// thinning): a patrol of an unchanged room does not grow the map.
+  RevisitThinningConfig thinning;
   /// Keyframes and pose updates waiting for the mapping thread; AddKeyframe beyond this answers
   /// kResourceExhausted instead of queueing without bound.
   int max_queue = 64;
@@ -246,6 +251,11 @@ struct AddKeyframeOutcome {
   /// PoseSource::kEstimate: the held keyframes this keyframe's placement mapped (before it), in
   /// the order they came.
   std::vector<KeyframeId> attached;
+  /// The keyframe repeated the view of this stored keyframe of an earlier session with nothing
+  /// changed (MapServerConfig::thinning): it was kept as a revisit, not mapped or stored as a
+  /// keyframe (keyframe_id 0); 0 otherwise.
+  KeyframeId repeated_keyframe = 0;
+  float explained_fraction = 0.f;  ///< of its depth pixels, by the stored views (thinning)
 };
 
 struct PoseUpdateOutcome {
@@ -260,16 +270,21 @@ struct PoseUpdateOutcome {
 
 /// One change of the map, in version order.
 struct MapChange {
-  enum class Kind { kKeyframeAdded, kPosesUpdated };
+  /// kKeyframeRepeated: a keyframe was kept as a revisit of a stored view (thinning); the
+  /// objects that view saw were seen again (their last sighting changed).
+  enum class Kind { kKeyframeAdded, kPosesUpdated, kKeyframeRepeated };
   std::uint64_t version = 0;
   Kind kind = Kind::kKeyframeAdded;
-  KeyframeId keyframe_id = 0;  ///< for kKeyframeAdded
+  KeyframeId keyframe_id = 0;  ///< kKeyframeAdded: the new one; kKeyframeRepeated: the one repeated
   std::vector<ObjectId> added;
   std::vector<ObjectId> updated;
   std::vector<ObjectId> removed;
   /// Object changes (added, removed, moved) first listed at this version.
   std::vector<MapObjectChange> object_changes;
 };
+
+/// "keyframe_added", "poses_updated", "keyframe_repeated".
+[[nodiscard]] const char* MapChangeKindName(MapChange::Kind kind);
 
 struct ServerStatus {
   std::uint64_t map_version = 0;

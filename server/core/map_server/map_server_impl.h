@@ -149,6 +149,17 @@ struct MapServer::Impl {
   /// map regenerated since the last one). A failure only costs the next start its speed.
   void MaybeCheckpoint(bool force);
   MapJob::Result ApplyKeyframe(MapJob* job);
+  /// The revisit `job`'s keyframe is when it repeats the view of stored keyframes of earlier
+  /// sessions with nothing changed (MapServerConfig::thinning); nullopt when it is to be mapped.
+  [[nodiscard]] std::optional<StoredRevisit> RepeatedView(const MapJob& job) const;
+  /// Stores the revisit instead of the keyframe; the objects its view saw were last seen now.
+  MapJob::Result ApplyRevisit(MapJob* job, StoredRevisit revisit);
+  /// The sessions a write of `session` stores with it: its own when it is not stored yet, and
+  /// the ends of stored sessions (into `ends` too) ...
+  std::vector<StoredSession> SessionsToStore(const StoredSession& session,
+                                             std::vector<StoredSession>* ends);
+  /// ... and, once committed, what is stored of them now.
+  void SessionsStored(SessionId session_id, const std::vector<StoredSession>& ends);
   MapJob::Result ApplyPoses(MapJob* job);
   void Publish(std::shared_ptr<const MapSnapshot> next, MapChange change);
   ServiceStatus Enqueue(std::shared_ptr<MapJob> job, bool bounded);

@@ -48,7 +48,7 @@ std::shared_ptr<ObjectView> SnapshotBuilder::MakeView(
                    });
   if (!view->sightings.empty()) {
     view->first_seen = Seen(view->sightings.front().keyframe_id);
-    view->last_seen = Seen(view->sightings.back().keyframe_id);
+    view->last_seen = LastSeen(object);
   }
   if (last_absent != 0) view->last_seen_absent = Seen(last_absent);
   view->confirmed = confirmed;
@@ -63,6 +63,40 @@ std::shared_ptr<ObjectView> SnapshotBuilder::MakeView(
 
 void SnapshotBuilder::AddKeyframe(KeyframeId id, SessionId session_id, double stamp_s) {
   keyframes_[id] = ObjectSeen{id, session_id, stamp_s};
+}
+
+namespace {
+
+bool SameSighting(const ObjectSeen& a, const ObjectSeen& b) {
+  return a.keyframe_id == b.keyframe_id && a.session_id == b.session_id && a.stamp_s == b.stamp_s;
+}
+
+// Sessions come in order; within one, the camera's stamps do.
+bool Later(const ObjectSeen& a, const ObjectSeen& b) {
+  return a.session_id != b.session_id ? a.session_id > b.session_id : a.stamp_s > b.stamp_s;
+}
+
+}  // namespace
+
+void SnapshotBuilder::AddRevisit(KeyframeId id, SessionId session_id, double stamp_s) {
+  const ObjectSeen seen{id, session_id, stamp_s};
+  const auto [it, inserted] = revisits_.emplace(id, seen);
+  if (!inserted && Later(seen, it->second)) it->second = seen;
+}
+
+ObjectSeen SnapshotBuilder::LastSeen(const MapObject& object) const {
+  ObjectSeen last;
+  KeyframeId newest = 0;
+  for (const ObjectObservation& observation : object.observations) {
+    newest = std::max(newest, observation.keyframe_id);
+  }
+  if (newest != 0) last = Seen(newest);
+  if (revisits_.empty()) return last;
+  for (const ObjectObservation& observation : object.observations) {
+    const auto revisit = revisits_.find(observation.keyframe_id);
+    if (revisit != revisits_.end() && Later(revisit->second, last)) last = revisit->second;
+  }
+  return last;
 }
 
 void SnapshotBuilder::Touch(int class_id, std::uint64_t version) {
@@ -164,6 +198,7 @@ std::shared_ptr<const MapSnapshot> SnapshotBuilder::Build(const Mapper& mapper,
         previous && same_model && previous->confirmed == is_confirmed &&
         previous->observations == static_cast<int>(object.observations.size()) &&
         previous->last_seen_absent.keyframe_id == last_absent &&
+        (revisits_.empty() || SameSighting(previous->last_seen, LastSeen(object))) &&
         previous->previous_places.size() + 1 == places &&
         previous->added.keyframe_id == (history != nullptr ? history->added_at : 0);
     auto& target = gone ? snapshot->tombstones : snapshot->objects;

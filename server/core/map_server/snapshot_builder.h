@@ -35,6 +35,9 @@ class SnapshotBuilder {
   void AddKeyframe(KeyframeId id, SessionId session_id, double stamp_s);
   /// The keyframe's session and stamp (unknown ones: 0).
   [[nodiscard]] ObjectSeen Seen(KeyframeId id) const;
+  /// The view of keyframe `id` was seen again (a revisit) in this session at this stamp: the
+  /// objects it observed were last seen then, if that is later than what they know.
+  void AddRevisit(KeyframeId id, SessionId session_id, double stamp_s);
 
  private:
   std::shared_ptr<ObjectView> MakeView(const ObjectMap& objects, const MapObject& object,
@@ -44,6 +47,9 @@ class SnapshotBuilder {
   /// Sets the view's published id, state, places and addition from its history (may be null).
   void ApplyHistory(const ObjectHistory* history, ObjectId published_id, ObjectView* view) const;
   [[nodiscard]] ObjectPlaceView PlaceView(const ObjectPlace& place) const;
+  /// The object's last sighting: its newest observation's keyframe, or a later revisit of the
+  /// view of one of its observations' keyframes.
+  [[nodiscard]] ObjectSeen LastSeen(const MapObject& object) const;
   /// The changes of `changes` with the version each was first listed at; new ones go to `diff`.
   std::vector<MapObjectChange> ListChanges(const ObjectChanges& changes, std::uint64_t version,
                                            Diff* diff);
@@ -56,6 +62,8 @@ class SnapshotBuilder {
   // (kind, published id, keyframe) of each change listed so far -> the version it was listed at.
   std::map<std::tuple<int, ObjectId, KeyframeId>, std::uint64_t> change_versions_;
   std::map<KeyframeId, ObjectSeen> keyframes_;
+  // Keyframe -> its newest revisit (ObjectSeen of the revisit's session and stamp).
+  std::map<KeyframeId, ObjectSeen> revisits_;
   // ObjectMap::ModelKey behind each view's model.
   std::map<ObjectId, std::vector<std::pair<ObjectId, std::uint64_t>>> model_keys_;
   std::array<std::uint64_t, kNumObjectClasses> class_changed_version_{};
