@@ -67,8 +67,9 @@ std::vector<std::string> Query(const std::string& db_path, const std::string& sq
 
 // kill -9 at random moments of an ingest, each into a named session of its own, ten times: after
 // each restart every acknowledged keyframe is stored (and nothing twice) in the session it was
-// acknowledged in, every such session is stored with its name, and SQLite's integrity check
-// passes.
+// acknowledged in, as a keyframe or, where it repeated a stored view of an earlier round (the
+// rounds send the same frames), as a revisit; every such session is stored with its name, and
+// SQLite's integrity check passes.
 TEST(KillSoak, EveryAcknowledgedKeyframeSurvivesTenKills) {
   const fs::path dir = fs::temp_directory_path() / ("objmap_soak_" + std::to_string(::getpid()));
   fs::remove_all(dir);
@@ -89,6 +90,7 @@ TEST(KillSoak, EveryAcknowledgedKeyframeSurvivesTenKills) {
   std::set<std::string> acknowledged;
   std::map<std::string, std::int64_t> session_of;  // acknowledged keyframe -> its session
   std::map<std::int64_t, std::string> session_names;  // sessions started, by id
+  std::set<std::string> revisits_acknowledged;        // acknowledged as revisits of stored views
   int rounds_with_acknowledgements = 0;
   for (int round = 0; round < 10; ++round) {
     testing::ServerProcess server(OBJMAP_SERVER_PATH, db, log, {"--no-detector"});
@@ -115,6 +117,7 @@ TEST(KillSoak, EveryAcknowledgedKeyframeSurvivesTenKills) {
         std::lock_guard<std::mutex> lock(mutex);
         acknowledged.insert(request.name());
         session_of[request.name()] = response.session_id();
+        if (response.repeated_keyframe_id() != 0) revisits_acknowledged.insert(request.name());
         ++acknowledged_this_round;
       }
     });
@@ -125,16 +128,23 @@ TEST(KillSoak, EveryAcknowledgedKeyframeSurvivesTenKills) {
     if (acknowledged_this_round > 0) ++rounds_with_acknowledgements;
 
     EXPECT_EQ(Query(db, "PRAGMA integrity_check"), std::vector<std::string>{"ok"}) << round;
-    const std::vector<std::string> names = Query(db, "SELECT name FROM keyframes");
+    const std::vector<std::string> names =
+        Query(db, "SELECT name FROM keyframes UNION ALL SELECT name FROM revisits");
     const std::set<std::string> stored(names.begin(), names.end());
     EXPECT_EQ(stored.size(), names.size()) << "a keyframe stored twice, round " << round;
+    const std::vector<std::string> revisit_names = Query(db, "SELECT name FROM revisits");
+    const std::set<std::string> stored_revisits(revisit_names.begin(), revisit_names.end());
     for (const std::string& name : acknowledged) {
       EXPECT_EQ(stored.count(name), 1u) << name << " was acknowledged and is lost, round " << round;
+      EXPECT_EQ(stored_revisits.count(name), revisits_acknowledged.count(name))
+          << name << " is stored as what it was not acknowledged as, round " << round;
     }
     // Each acknowledged keyframe is stored in the session it was acknowledged in, and that
     // session with its name: no session is lost.
     const std::vector<std::string> keyframe_sessions =
-        Query(db, "SELECT name || ' ' || session_id FROM keyframes");
+        Query(db,
+              "SELECT name || ' ' || session_id FROM keyframes UNION ALL "
+              "SELECT name || ' ' || session_id FROM revisits");
     const std::set<std::string> stored_pairs(keyframe_sessions.begin(), keyframe_sessions.end());
     for (const auto& [name, session_id] : session_of) {
       EXPECT_EQ(stored_pairs.count(name + " " + std::to_string(session_id)), 1u)
@@ -148,6 +158,11 @@ TEST(KillSoak, EveryAcknowledgedKeyframeSurvivesTenKills) {
                         "(SELECT id FROM sessions)"),
               std::vector<std::string>{"0"})
         << "keyframes of a session without its row, round " << round;
+    EXPECT_EQ(Query(db,
+                    "SELECT count(*) FROM revisits WHERE session_id NOT IN "
+                    "(SELECT id FROM sessions)"),
+              std::vector<std::string>{"0"})
+        << "revisits of a session without its row, round " << round;
   }
   EXPECT_GE(rounds_with_acknowledgements, 5) << "the kills came before any write was done";
   // The last restart serves the map of every stored keyframe.
@@ -158,7 +173,8 @@ TEST(KillSoak, EveryAcknowledgedKeyframeSurvivesTenKills) {
   EXPECT_EQ(status.keyframes(),
             static_cast<std::int64_t>(Query(db, "SELECT name FROM keyframes").size()));
   std::cout << acknowledged.size() << " keyframes acknowledged over 10 kills, "
-            << status.keyframes() << " stored" << std::endl;
+            << status.keyframes() << " stored as keyframes, " << revisits_acknowledged.size()
+            << " as revisits" << std::endl;
   server.Kill(SIGTERM);
   fs::remove_all(dir);
 }
