@@ -147,6 +147,11 @@ void PrintSummary(const IngestCounts& counts, const v1::IngestSummary& summary, 
               << ")";
   }
   std::cout << "; skipped frames: " << counts.skipped << "\n";
+  if (summary.keyframes_repeated() > 0) {
+    std::cout << "keyframes kept as revisits of stored views (the same view, nothing changed; "
+                 "not stored again): "
+              << summary.keyframes_repeated() << "\n";
+  }
   if (summary.keyframes_untracked() > 0) {
     // With estimated poses: keyframes the server could not place, skipped by it.
     std::cout << "keyframes the server could not place when they came: "

@@ -34,7 +34,8 @@ bool WriteKeyframeImages(const SequenceRunReport& report,
   std::filesystem::create_directories(dir, error);
   for (const KeyframeReport& keyframe : report.keyframes) {
     const auto it = jpegs.find(static_cast<std::int64_t>(keyframe.frame_index));
-    if (it == jpegs.end()) continue;
+    // Keyframe id 0: kept as a revisit of a stored view, not a keyframe of the map.
+    if (it == jpegs.end() || keyframe.result.keyframe_id == 0) continue;
     const std::string path = dir + "/" + std::to_string(keyframe.result.keyframe_id) + ".jpg";
     std::ofstream out(path, std::ios::binary);
     out.write(reinterpret_cast<const char*>(it->second.data()),

@@ -37,6 +37,7 @@ nlohmann::json SessionJson(const v1::Session& session) {
                          {"name", session.name()},
                          {"pose_source", session.pose_source()},
                          {"keyframes", session.keyframes()},
+                         {"revisits", session.revisits()},
                          {"current", session.current()}};
   json["started_s"] = session.has_started() ? nlohmann::json(session.started_s()) : nullptr;
   json["ended_s"] = session.has_ended() ? nlohmann::json(session.ended_s()) : nullptr;
@@ -50,21 +51,21 @@ nlohmann::json SessionJson(const v1::Session& session) {
 }
 
 void PrintTable(const v1::ListSessionsResponse& response) {
-  std::printf("%4s  %-24s %-9s %-19s  %-19s  %9s  %s\n", "id", "name", "poses", "started",
-              "ended", "keyframes", "ids");
+  std::printf("%4s  %-24s %-9s %-19s  %-19s  %9s  %8s  %s\n", "id", "name", "poses", "started",
+              "ended", "keyframes", "revisits", "ids");
   for (const v1::Session& session : response.sessions()) {
     const std::string ids = session.keyframes() > 0
                                 ? std::to_string(session.first_keyframe_id()) + ".." +
                                       std::to_string(session.last_keyframe_id())
                                 : "-";
-    std::printf("%4lld  %-24s %-9s %-19s  %-19s  %9lld  %s%s\n",
-                static_cast<long long>(session.id()), session.name().c_str(),
-                session.pose_source().empty() ? "-" : session.pose_source().c_str(),
-                WallTime(session.has_started(), session.started_s()).c_str(),
-                session.current() ? "(current)"
-                                  : WallTime(session.has_ended(), session.ended_s()).c_str(),
-                static_cast<long long>(session.keyframes()), ids.c_str(),
-                session.current() ? "  *" : "");
+    std::printf(
+        "%4lld  %-24s %-9s %-19s  %-19s  %9lld  %8lld  %s%s\n",
+        static_cast<long long>(session.id()), session.name().c_str(),
+        session.pose_source().empty() ? "-" : session.pose_source().c_str(),
+        WallTime(session.has_started(), session.started_s()).c_str(),
+        session.current() ? "(current)" : WallTime(session.has_ended(), session.ended_s()).c_str(),
+        static_cast<long long>(session.keyframes()), static_cast<long long>(session.revisits()),
+        ids.c_str(), session.current() ? "  *" : "");
   }
 }
 

@@ -275,6 +275,7 @@ void SessionToProto(const SessionSummary& summary, bool current, v1::Session* pr
   proto->set_has_ended(session.ended_s.has_value());
   proto->set_ended_s(session.ended_s.value_or(0.0));
   proto->set_keyframes(static_cast<std::int64_t>(summary.keyframes));
+  proto->set_revisits(static_cast<std::int64_t>(summary.revisits));
   proto->set_first_keyframe_id(summary.first_keyframe);
   proto->set_last_keyframe_id(summary.last_keyframe);
   proto->set_first_stamp(summary.first_stamp_s);
@@ -284,8 +285,17 @@ void SessionToProto(const SessionSummary& summary, bool current, v1::Session* pr
 
 void MapChangeToProto(const MapChange& change, v1::MapChange* proto) {
   proto->set_map_version(change.version);
-  proto->set_kind(change.kind == MapChange::Kind::kKeyframeAdded ? v1::MapChange::KEYFRAME_ADDED
-                                                                 : v1::MapChange::POSES_UPDATED);
+  switch (change.kind) {
+    case MapChange::Kind::kKeyframeAdded:
+      proto->set_kind(v1::MapChange::KEYFRAME_ADDED);
+      break;
+    case MapChange::Kind::kPosesUpdated:
+      proto->set_kind(v1::MapChange::POSES_UPDATED);
+      break;
+    case MapChange::Kind::kKeyframeRepeated:
+      proto->set_kind(v1::MapChange::KEYFRAME_REPEATED);
+      break;
+  }
   proto->set_keyframe_id(change.keyframe_id);
   proto->mutable_added_objects()->Add(change.added.begin(), change.added.end());
   proto->mutable_updated_objects()->Add(change.updated.begin(), change.updated.end());

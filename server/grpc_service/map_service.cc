@@ -62,6 +62,8 @@ void OutcomeToProto(const AddKeyframeOutcome& outcome, v1::AddKeyframeResponse* 
   response->set_relocalized(outcome.relocalized);
   response->set_session_id(outcome.session_id);
   for (const KeyframeId id : outcome.attached) response->add_attached_keyframe_ids(id);
+  response->set_repeated_keyframe_id(outcome.repeated_keyframe);
+  response->set_explained_fraction(outcome.explained_fraction);
   response->mutable_created_objects()->Add(outcome.created.begin(), outcome.created.end());
   response->mutable_updated_objects()->Add(outcome.updated.begin(), outcome.updated.end());
   response->mutable_removed_objects()->Add(outcome.removed.begin(), outcome.removed.end());
@@ -231,7 +233,7 @@ grpc::Status MapServiceImpl::IngestKeyframes(grpc::ServerContext* /*context*/,
     constexpr int kMaxUntrackedReasons = 100;
     int index = 0;  // of the message in the stream
     int added = 0;
-    int untracked = 0, held = 0, attached = 0;
+    int untracked = 0, held = 0, attached = 0, repeated = 0;
     int objects_created = 0;
     std::uint64_t map_version = server_.Snapshot()->version;
     for (; reader->Read(&bytes); ++index) {
@@ -256,19 +258,26 @@ grpc::Status MapServiceImpl::IngestKeyframes(grpc::ServerContext* /*context*/,
         return grpc::Status(status.error_code(),
                             StreamPrefix(index, &request) + status.error_message());
       }
-      // Held keyframes this one's placement mapped came before it.
-      const KeyframeId first_id =
-          outcome.attached.empty() ? outcome.keyframe_id : outcome.attached.front();
-      if (added == 0) summary->set_first_keyframe_id(first_id);
-      summary->set_last_keyframe_id(outcome.keyframe_id);
+      // Held keyframes this one's placement mapped came before it; a keyframe kept as a revisit
+      // (repeated_keyframe) is none of the map's.
+      const bool is_revisit = outcome.repeated_keyframe != 0;
+      repeated += is_revisit;
+      const int mapped = static_cast<int>(outcome.attached.size()) + (is_revisit ? 0 : 1);
+      if (mapped > 0) {
+        const KeyframeId first_id =
+            outcome.attached.empty() ? outcome.keyframe_id : outcome.attached.front();
+        if (added == 0) summary->set_first_keyframe_id(first_id);
+        summary->set_last_keyframe_id(is_revisit ? outcome.attached.back() : outcome.keyframe_id);
+      }
       objects_created += static_cast<int>(outcome.created.size());
       map_version = outcome.map_version;
       attached += static_cast<int>(outcome.attached.size());
-      added += 1 + static_cast<int>(outcome.attached.size());
+      added += mapped;
     }
     summary->set_keyframes_untracked(untracked);
     summary->set_keyframes_held(held);
     summary->set_keyframes_attached(attached);
+    summary->set_keyframes_repeated(repeated);
     summary->set_keyframes_added(added);
     summary->set_objects_created(objects_created);
     summary->set_map_version(map_version);

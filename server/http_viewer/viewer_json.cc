@@ -150,13 +150,9 @@ json ObjectDetailJson(const MapSnapshot& snapshot, const ObjectView& view) {
 // Little-endian float32 x y z per point, then r g b bytes per point (grey when uncoloured):
 // what a Float32Array and a Uint8Array read without parsing.
 json ChangeJson(const MapChange& change) {
-  return json{
-      {"version", change.version},
-      {"kind", change.kind == MapChange::Kind::kKeyframeAdded ? "keyframe_added" : "poses_updated"},
-      {"keyframe", change.keyframe_id},
-      {"added", change.added},
-      {"updated", change.updated},
-      {"removed", change.removed}};
+  return json{{"version", change.version},      {"kind", MapChangeKindName(change.kind)},
+              {"keyframe", change.keyframe_id}, {"added", change.added},
+              {"updated", change.updated},      {"removed", change.removed}};
 }
 
 }  // namespace objmap::http_viewer

@@ -410,9 +410,17 @@ void InventoryEntryToMsg(const InventoryEntry& entry, objmap_msgs::InventoryEntr
 
 void MapChangeToMsg(const MapChange& change, objmap_msgs::MapChange* msg) {
   msg->map_version = change.version;
-  msg->kind = change.kind == MapChange::Kind::kKeyframeAdded
-                  ? objmap_msgs::MapChange::KEYFRAME_ADDED
-                  : objmap_msgs::MapChange::POSES_UPDATED;
+  switch (change.kind) {
+    case MapChange::Kind::kKeyframeAdded:
+      msg->kind = objmap_msgs::MapChange::KEYFRAME_ADDED;
+      break;
+    case MapChange::Kind::kPosesUpdated:
+      msg->kind = objmap_msgs::MapChange::POSES_UPDATED;
+      break;
+    case MapChange::Kind::kKeyframeRepeated:
+      msg->kind = objmap_msgs::MapChange::KEYFRAME_REPEATED;
+      break;
+  }
   msg->keyframe_id = change.keyframe_id;
   msg->added_objects.assign(change.added.begin(), change.added.end());
   msg->updated_objects.assign(change.updated.begin(), change.updated.end());

@@ -362,7 +362,8 @@ void MapNode::Impl::MapFrame(RgbdFrame frame, const ros::Time& stamp,
       server->AddKeyframe(std::move(frame), std::move(detections), &outcome);
   if (!status.ok()) return Reject(stamp, "the map server refused it: " + status.message);
   ++keyframes_sent;
-  if (config.estimates_poses() && last_tracking) {
+  // A keyframe kept as a revisit of a stored view (thinning) is no keyframe of the map.
+  if (config.estimates_poses() && last_tracking && outcome.repeated_keyframe == 0) {
     tracked_keyframes.Add(outcome.keyframe_id, *last_tracking, *odometry);
     keyframe_stamps[outcome.keyframe_id] = stamp;
     PublishTrajectory();
