@@ -147,10 +147,11 @@ void PrintSummary(const IngestCounts& counts, const v1::IngestSummary& summary, 
               << ")";
   }
   std::cout << "; skipped frames: " << counts.skipped << "\n";
-  if (summary.keyframes_repeated() > 0) {
+  if (summary.keyframes_repeated() > 0 || summary.keyframes_repeated_in_part() > 0) {
     std::cout << "keyframes kept as revisits of stored views (the same view, nothing changed; "
                  "not stored again): "
-              << summary.keyframes_repeated() << "\n";
+              << summary.keyframes_repeated() << "; mapped with only the part new to the map: "
+              << summary.keyframes_repeated_in_part() << "\n";
   }
   if (summary.keyframes_untracked() > 0) {
     // With estimated poses: keyframes the server could not place, skipped by it.

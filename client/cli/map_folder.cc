@@ -97,7 +97,7 @@ int RunIntoMapFolder(const MapFolderRun& config, FrameStream* stream,
             << started.session.pose_source << "\n";
 
   std::map<KeyframeId, Eigen::Isometry3d> input_poses;
-  int relocalized = 0, attached = 0, repeated = 0;
+  int relocalized = 0, attached = 0, repeated = 0, repeated_in_part = 0;
   const KeyframeSink sink = [&](const RgbdFrame& frame, const std::vector<Detection>& detections,
                                 KeyframeResult* result, std::string* reason) {
     AddKeyframeOutcome outcome;
@@ -111,10 +111,11 @@ int RunIntoMapFolder(const MapFolderRun& config, FrameStream* stream,
     result->created = outcome.created;
     result->updated = outcome.updated;
     if (outcome.relocalized) ++relocalized;
-    if (outcome.repeated_keyframe != 0) {
+    if (outcome.keyframe_id == 0) {
       ++repeated;  // a revisit of a stored view, no keyframe of the map
     } else {
       input_poses[outcome.keyframe_id] = frame.T_W_C;
+      if (outcome.repeated_keyframe != 0) ++repeated_in_part;
     }
     // Held keyframes of a provisional part this one placed: mapped now (their input poses are
     // not at hand here, so they are not scored).
@@ -143,9 +144,10 @@ int RunIntoMapFolder(const MapFolderRun& config, FrameStream* stream,
             << report.keyframes.size() + static_cast<std::size_t>(attached) -
                    static_cast<std::size_t>(repeated)
             << " keyframes mapped of " << report.frames_read << " frames read";
-  if (repeated > 0) {
-    std::cout << ", " << repeated
-              << " kept as revisits of stored views (the same view, nothing changed)";
+  if (repeated > 0 || repeated_in_part > 0) {
+    std::cout << " (" << repeated_in_part
+              << " of them with only the part new to the map: the rest repeated stored views), "
+              << repeated << " kept as revisits of stored views (the same view, nothing changed)";
   }
   if (config.server.pose_source == PoseSource::kEstimate) {
     std::cout << " (" << relocalized << " placed in the saved map by relocalisation, " << attached

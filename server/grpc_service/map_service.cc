@@ -233,7 +233,7 @@ grpc::Status MapServiceImpl::IngestKeyframes(grpc::ServerContext* /*context*/,
     constexpr int kMaxUntrackedReasons = 100;
     int index = 0;  // of the message in the stream
     int added = 0;
-    int untracked = 0, held = 0, attached = 0, repeated = 0;
+    int untracked = 0, held = 0, attached = 0, repeated = 0, repeated_in_part = 0;
     int objects_created = 0;
     std::uint64_t map_version = server_.Snapshot()->version;
     for (; reader->Read(&bytes); ++index) {
@@ -259,9 +259,10 @@ grpc::Status MapServiceImpl::IngestKeyframes(grpc::ServerContext* /*context*/,
                             StreamPrefix(index, &request) + status.error_message());
       }
       // Held keyframes this one's placement mapped came before it; a keyframe kept as a revisit
-      // (repeated_keyframe) is none of the map's.
-      const bool is_revisit = outcome.repeated_keyframe != 0;
+      // only (keyframe_id 0) is none of the map's.
+      const bool is_revisit = outcome.keyframe_id == 0;
       repeated += is_revisit;
+      repeated_in_part += !is_revisit && outcome.repeated_keyframe != 0;
       const int mapped = static_cast<int>(outcome.attached.size()) + (is_revisit ? 0 : 1);
       if (mapped > 0) {
         const KeyframeId first_id =
@@ -278,6 +279,7 @@ grpc::Status MapServiceImpl::IngestKeyframes(grpc::ServerContext* /*context*/,
     summary->set_keyframes_held(held);
     summary->set_keyframes_attached(attached);
     summary->set_keyframes_repeated(repeated);
+    summary->set_keyframes_repeated_in_part(repeated_in_part);
     summary->set_keyframes_added(added);
     summary->set_objects_created(objects_created);
     summary->set_map_version(map_version);

@@ -363,7 +363,7 @@ void MapNode::Impl::MapFrame(RgbdFrame frame, const ros::Time& stamp,
   if (!status.ok()) return Reject(stamp, "the map server refused it: " + status.message);
   ++keyframes_sent;
   // A keyframe kept as a revisit of a stored view (thinning) is no keyframe of the map.
-  if (config.estimates_poses() && last_tracking && outcome.repeated_keyframe == 0) {
+  if (config.estimates_poses() && last_tracking && outcome.keyframe_id != 0) {
     tracked_keyframes.Add(outcome.keyframe_id, *last_tracking, *odometry);
     keyframe_stamps[outcome.keyframe_id] = stamp;
     PublishTrajectory();

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 
@@ -152,6 +153,52 @@ TEST_F(MapServerRevisits, ASessionOverAnUnchangedPlaceIsKeptAsRevisitsThatOutliv
     EXPECT_EQ(view->first_seen.session_id, 1);
     EXPECT_GT(view->last_seen.stamp_s, view->first_seen.stamp_s);
   }
+}
+
+// A later session's path a little farther back and higher: each keyframe repeats the stored
+// views in part and is mapped and stored with the depth of the rest only.
+TEST_F(MapServerRevisits, AViewThatRepeatsStoredViewsInPartIsStoredWithItsNewPartOnly) {
+  std::vector<KeyframeId> partial;
+  {
+    auto server = OpenServer();
+    ASSERT_TRUE(server);
+    MapVisit(server.get(), kFirstEyes, {kCupOne, kCupTwo});
+    ASSERT_TRUE(server->StartSession("from farther back", nullptr).ok());
+    std::vector<Eigen::Vector3d> eyes;
+    for (const Eigen::Vector3d& eye : kFirstEyes) {
+      eyes.push_back(kTarget + 1.2 * (eye - kTarget) + Eigen::Vector3d(0, 0, 0.1));
+    }
+    for (const AddKeyframeOutcome& outcome : MapVisit(server.get(), eyes, {kCupOne, kCupTwo})) {
+      EXPECT_NE(outcome.keyframe_id, 0);
+      EXPECT_NE(outcome.repeated_keyframe, 0);
+      EXPECT_LT(outcome.explained_fraction, config_.thinning.min_explained_fraction);
+      partial.push_back(outcome.keyframe_id);
+    }
+    EXPECT_EQ(server->Status().keyframes, 6u);
+    EXPECT_EQ(LastSeenSessions(*server), (std::vector<SessionId>{2, 2}));
+    std::vector<MapObjectChange> changes;
+    std::uint64_t version = 0;
+    ASSERT_TRUE(server->ListChanges(ChangeFilter{}, &changes, &version).ok());
+    EXPECT_TRUE(changes.empty());  // nothing changed
+  }
+  std::string why;
+  auto store = KeyframeStore::Open(db_path_, KeyframeStoreConfig{}, &why);
+  ASSERT_TRUE(store) << why;
+  auto with_depth = [](const StoredKeyframe& keyframe) {
+    return std::count_if(keyframe.depth_mm.begin(), keyframe.depth_mm.end(),
+                         [](std::uint16_t z) { return z > 0; });
+  };
+  StoredKeyframe first;
+  ASSERT_TRUE(store->LoadKeyframe(1, &first, &why)) << why;
+  for (KeyframeId id : partial) {
+    StoredKeyframe keyframe;
+    ASSERT_TRUE(store->LoadKeyframe(id, &keyframe, &why)) << why;
+    EXPECT_LT(with_depth(keyframe), with_depth(first) / 2) << "keyframe " << id;
+    EXPECT_GT(with_depth(keyframe), 0) << "keyframe " << id;
+  }
+  std::vector<StoredRevisit> revisits;
+  ASSERT_TRUE(store->ListRevisits(0, &revisits, &why)) << why;
+  EXPECT_EQ(revisits.size(), partial.size());
 }
 
 TEST_F(MapServerRevisits, KeyframesThatSeeAChangeAreMappedAndTheChangeFound) {

@@ -168,8 +168,11 @@ void VisitObjmapConfig(ObjmapConfig* c, Visitor& v) {
   v("depth_margin_m", &t.depth_margin_m);
   v("depth_margin_per_m2", &t.depth_margin_per_m2);
   v("min_explained_fraction", &t.min_explained_fraction);
-  v("max_contradicted_patch_px", &t.max_contradicted_patch_px);
+  v("max_changed_patch_px", &t.max_changed_patch_px);
   v("min_depth_fraction", &t.min_depth_fraction);
+  v("min_partial_explained_fraction", &t.min_partial_explained_fraction);
+  v("min_new_fraction_in_box", &t.min_new_fraction_in_box);
+  v("box_margin", &t.box_margin);
   VisitMapper(&s.mapper, v);
   VisitMapModel(&s.mapper, v);
   KeyframeSelectorConfig& k = c->keyframes;

@@ -366,8 +366,13 @@ void MapServer::Impl::SessionsStored(SessionId session_id, const std::vector<Sto
 
 MapJob::Result MapServer::Impl::ApplyKeyframe(MapJob* job) {
   const auto start = Clock::now();
-  if (std::optional<StoredRevisit> revisit = RepeatedView(*job)) {
-    return ApplyRevisit(job, std::move(*revisit));
+  const std::optional<Repeated> repeated = RepeatedView(*job);
+  if (repeated && repeated->whole) return ApplyRevisit(job, repeated->revisit);
+  // Repeated in part: only the part new to the map is mapped and stored.
+  if (repeated) {
+    std::vector<BoundingBox2D> boxes;
+    for (const Detection& detection : job->detections) boxes.push_back(detection.box);
+    KeepUnexplained(repeated->coverage, boxes, config.thinning, &job->frame.depth);
   }
   MapJob::Result out;
   KeyframeResult result;
@@ -388,6 +393,7 @@ MapJob::Result MapServer::Impl::ApplyKeyframe(MapJob* job) {
   change.keyframe = MakeStoredKeyframe(job->frame, job->detections, result.keyframe_id,
                                        *mapper->FindKeyframe(result.keyframe_id));
   change.keyframe->session_id = job->session.id;
+  if (repeated) change.revisit = repeated->revisit;
   std::vector<StoredSession> ends;
   change.sessions = SessionsToStore(job->session, &ends);
   change.observations = NewObservations(mapper->objects(), touched, result.keyframe_id);
@@ -418,6 +424,12 @@ MapJob::Result MapServer::Impl::ApplyKeyframe(MapJob* job) {
   SessionsStored(job->session.id, ends);
   out.keyframe.session_id = job->session.id;
   snapshot_builder.AddKeyframe(result.keyframe_id, job->session.id, job->frame.stamp_s);
+  if (repeated) {
+    const StoredRevisit& revisit = repeated->revisit;
+    snapshot_builder.AddRevisit(revisit.keyframe_id, revisit.session_id, revisit.stamp_s);
+    out.keyframe.repeated_keyframe = revisit.keyframe_id;
+    out.keyframe.explained_fraction = revisit.explained_fraction;
+  }
   SnapshotBuilder::Diff diff;
   auto next = snapshot_builder.Build(*mapper, job->version, &diff);
   MapChange map_change{job->version,       MapChange::Kind::kKeyframeAdded,

@@ -252,8 +252,9 @@ struct AddKeyframeOutcome {
   /// the order they came.
   std::vector<KeyframeId> attached;
   /// The keyframe repeated the view of this stored keyframe of an earlier session with nothing
-  /// changed (MapServerConfig::thinning): it was kept as a revisit, not mapped or stored as a
-  /// keyframe (keyframe_id 0); 0 otherwise.
+  /// changed (MapServerConfig::thinning), 0 otherwise. With keyframe_id 0 it repeated it whole
+  /// and was kept as a revisit only, not mapped or stored as a keyframe; otherwise it repeated
+  /// a part and was mapped and stored with the depth of the rest only (and a revisit).
   KeyframeId repeated_keyframe = 0;
   float explained_fraction = 0.f;  ///< of its depth pixels, by the stored views (thinning)
 };

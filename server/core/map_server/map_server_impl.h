@@ -149,9 +149,15 @@ struct MapServer::Impl {
   /// map regenerated since the last one). A failure only costs the next start its speed.
   void MaybeCheckpoint(bool force);
   MapJob::Result ApplyKeyframe(MapJob* job);
-  /// The revisit `job`'s keyframe is when it repeats the view of stored keyframes of earlier
-  /// sessions with nothing changed (MapServerConfig::thinning); nullopt when it is to be mapped.
-  [[nodiscard]] std::optional<StoredRevisit> RepeatedView(const MapJob& job) const;
+  /// What `job`'s keyframe repeats of stored keyframes of earlier sessions, nothing changed
+  /// (MapServerConfig::thinning): the whole view (kept as a revisit only) or a part (mapped
+  /// with the rest of its depth only, and a revisit); nullopt when it is to be mapped whole.
+  struct Repeated {
+    StoredRevisit revisit;
+    bool whole = false;
+    ViewCoverage coverage;
+  };
+  [[nodiscard]] std::optional<Repeated> RepeatedView(const MapJob& job) const;
   /// Stores the revisit instead of the keyframe; the objects its view saw were last seen now.
   MapJob::Result ApplyRevisit(MapJob* job, StoredRevisit revisit);
   /// The sessions a write of `session` stores with it: its own when it is not stored yet, and

@@ -15,15 +15,21 @@ bool RevisitThinningConfig::IsValid(std::string* why) const {
     *why = "thinning: max_views must be >= 1 and pixel_stride in [1, 64]";
     return false;
   }
-  if (!(depth_margin_m >= 0.f) || !(depth_margin_per_m2 >= 0.f) ||
-      !(max_contradicted_patch_px >= 0.f)) {
-    *why =
-        "thinning: depth_margin_m, depth_margin_per_m2 and max_contradicted_patch_px must be >= 0";
+  if (!(depth_margin_m >= 0.f) || !(depth_margin_per_m2 >= 0.f) || !(max_changed_patch_px >= 0.f)) {
+    *why = "thinning: depth_margin_m, depth_margin_per_m2 and max_changed_patch_px must be >= 0";
     return false;
   }
   if (!(min_explained_fraction > 0.f && min_explained_fraction <= 1.f) ||
       !(min_depth_fraction >= 0.f && min_depth_fraction <= 1.f)) {
     *why = "thinning: min_explained_fraction must be in (0, 1] and min_depth_fraction in [0, 1]";
+    return false;
+  }
+  if (!(min_partial_explained_fraction > 0.f && min_partial_explained_fraction <= 1.f) ||
+      !(min_new_fraction_in_box >= 0.f && min_new_fraction_in_box <= 1.f) ||
+      !(box_margin >= 0.f && box_margin <= 10.f)) {
+    *why =
+        "thinning: min_partial_explained_fraction must be in (0, 1], min_new_fraction_in_box in "
+        "[0, 1] and box_margin in [0, 10]";
     return false;
   }
   return true;
@@ -42,45 +48,55 @@ bool IsNearbyView(const Eigen::Isometry3d& stored_W_C, const Eigen::Isometry3d& 
 
 namespace {
 
-// What a stored view says of a point the new keyframe measured.
+// What a depth image says of a point at depth z (metres) along the ray of one of its pixels.
 enum class Verdict {
-  kUnseen,       // outside its image, or no depth there: it says nothing
-  kExplained,    // it measured the point (within the margin along its ray)
-  kContradicted  // it measured something else there: nearer or farther
+  kUnseen,     // outside the image, no depth there, or something nearer hides it
+  kExplained,  // it measured the point (within the margin along its ray)
+  kInFront     // it measured something farther: its ray went through where the point is
 };
 
-// `view`'s verdict on p_W, at the pixel p_W projects to or one of its 8 neighbours (depth edges
-// move by a pixel between views).
-Verdict Judge(const StoredView& view, const Eigen::Isometry3d& T_C_W, const Eigen::Vector3d& p_W,
-              const RevisitThinningConfig& config) {
+float MarginMm(float z, const RevisitThinningConfig& config) {
+  return 1000.f * (config.depth_margin_m + config.depth_margin_per_m2 * z * z);
+}
+
+// The verdict of the depth image (millimetres, row-major) on a point at depth z projecting to
+// (u, v), at that pixel and its 8 neighbours (depth edges move by a pixel between views): in
+// front only when every neighbour with depth measured beyond it.
+Verdict Judge(const std::vector<std::uint16_t>& depth_mm, int width, int height, double u, double v,
+              float z, const RevisitThinningConfig& config) {
+  const int col = static_cast<int>(std::lround(u));
+  const int row = static_cast<int>(std::lround(v));
+  if (col < 0 || row < 0 || col >= width || row >= height) return Verdict::kUnseen;
+  const float margin_mm = MarginMm(z, config);
+  const float z_mm = 1000.f * z;
+  bool measured_any = false, all_beyond = true;
+  for (int dr = -1; dr <= 1; ++dr) {
+    const int r = row + dr;
+    if (r < 0 || r >= height) continue;
+    for (int dc = -1; dc <= 1; ++dc) {
+      const int c = col + dc;
+      if (c < 0 || c >= width) continue;
+      const std::uint16_t measured = depth_mm[static_cast<std::size_t>(r) * width + c];
+      if (measured == 0) continue;
+      measured_any = true;
+      const float difference = static_cast<float>(measured) - z_mm;
+      if (std::abs(difference) <= margin_mm) return Verdict::kExplained;
+      all_beyond &= difference > margin_mm;
+    }
+  }
+  return measured_any && all_beyond ? Verdict::kInFront : Verdict::kUnseen;
+}
+
+// `view`'s verdict on the point p_W.
+Verdict JudgeInView(const StoredView& view, const Eigen::Isometry3d& T_C_W,
+                    const Eigen::Vector3d& p_W, const RevisitThinningConfig& config) {
   const Eigen::Vector3d p_C = T_C_W * p_W;
   if (p_C.z() <= 0.05) return Verdict::kUnseen;
   const CameraIntrinsics& intrinsics = *view.intrinsics;
-  const double u = intrinsics.fx * p_C.x() / p_C.z() + intrinsics.cx;
-  const double v = intrinsics.fy * p_C.y() / p_C.z() + intrinsics.cy;
-  const int col = static_cast<int>(std::lround(u));
-  const int row = static_cast<int>(std::lround(v));
-  if (col < 0 || row < 0 || col >= intrinsics.width || row >= intrinsics.height) {
-    return Verdict::kUnseen;
-  }
-  const float z = static_cast<float>(p_C.z());
-  const float margin_mm = 1000.f * (config.depth_margin_m + config.depth_margin_per_m2 * z * z);
-  const float z_mm = 1000.f * z;
-  const std::vector<std::uint16_t>& depth = *view.depth_mm;
-  bool measured_any = false;
-  for (int dr = -1; dr <= 1; ++dr) {
-    const int r = row + dr;
-    if (r < 0 || r >= intrinsics.height) continue;
-    for (int dc = -1; dc <= 1; ++dc) {
-      const int c = col + dc;
-      if (c < 0 || c >= intrinsics.width) continue;
-      const std::uint16_t measured = depth[static_cast<std::size_t>(r) * intrinsics.width + c];
-      if (measured == 0) continue;
-      measured_any = true;
-      if (std::abs(static_cast<float>(measured) - z_mm) <= margin_mm) return Verdict::kExplained;
-    }
-  }
-  return measured_any ? Verdict::kContradicted : Verdict::kUnseen;
+  return Judge(*view.depth_mm, intrinsics.width, intrinsics.height,
+               intrinsics.fx * p_C.x() / p_C.z() + intrinsics.cx,
+               intrinsics.fy * p_C.y() / p_C.z() + intrinsics.cy, static_cast<float>(p_C.z()),
+               config);
 }
 
 // The size (in samples) of the largest 8-connected set of true cells of a grid.
@@ -125,10 +141,17 @@ ViewCoverage CoverageOf(const DepthImage& depth, const CameraIntrinsics& intrins
   if (cols <= 0 || rows <= 0) return coverage;
   std::vector<Eigen::Isometry3d> T_C_W;
   for (const StoredView& view : views) T_C_W.push_back(view.T_W_C.inverse());
-  // Samples some view contradicts and none explains: what changed (or was hidden from them).
-  std::vector<std::uint8_t> contradicted(static_cast<std::size_t>(cols) * rows, 0);
+  // Samples that show a change: something put down (a stored view's ray went through the
+  // point the new keyframe measured, and no view measured it), or something taken away (the new
+  // keyframe's ray goes through a point a stored view measured). A point a stored view could not
+  // see, behind what it measured, is only new to it.
+  std::vector<std::uint8_t> changed(static_cast<std::size_t>(cols) * rows, 0);
   std::map<std::int64_t, int> explained_by;
   int explained = 0;
+  coverage.explained.assign(static_cast<std::size_t>(cols) * rows, 0);
+  coverage.grid_cols = cols;
+  coverage.grid_rows = rows;
+  coverage.stride = stride;
   for (int r = 0; r < rows; ++r) {
     for (int c = 0; c < cols; ++c) {
       const int row = r * stride, col = c * stride;
@@ -138,26 +161,63 @@ ViewCoverage CoverageOf(const DepthImage& depth, const CameraIntrinsics& intrins
       const Eigen::Vector3d p_C((col - intrinsics.cx) * z / intrinsics.fx,
                                 (row - intrinsics.cy) * z / intrinsics.fy, z);
       const Eigen::Vector3d p_W = T_W_C * p_C;
-      bool found = false, against = false;
+      bool found = false, put_down = false;
       for (std::size_t i = 0; i < views.size() && !found; ++i) {
-        const Verdict verdict = Judge(views[i], T_C_W[i], p_W, config);
+        const Verdict verdict = JudgeInView(views[i], T_C_W[i], p_W, config);
         if (verdict == Verdict::kExplained) {
           found = true;
           ++explained_by[views[i].keyframe_id];
         }
-        against |= verdict == Verdict::kContradicted;
+        put_down |= verdict == Verdict::kInFront;
       }
       if (found) {
         ++explained;
-      } else if (against) {
-        contradicted[static_cast<std::size_t>(r) * cols + c] = 1;
+        coverage.explained[static_cast<std::size_t>(r) * cols + c] = 1;
+      } else if (put_down) {
+        changed[static_cast<std::size_t>(r) * cols + c] = 1;
+      }
+    }
+  }
+  // Taken away: the stored views' points, judged by the new keyframe's depth in millimetres.
+  std::vector<std::uint16_t> depth_mm(depth.depth_m.size(), 0);
+  for (std::size_t i = 0; i < depth_mm.size(); ++i) {
+    const float z = depth.depth_m[i];
+    if (std::isfinite(z) && z > 0.f && z < 65.f) {
+      depth_mm[i] = static_cast<std::uint16_t>(std::lround(z * 1000.f));
+    }
+  }
+  const Eigen::Isometry3d T_C_W_new = T_W_C.inverse();
+  for (const StoredView& view : views) {
+    const CameraIntrinsics& k = *view.intrinsics;
+    const Eigen::Isometry3d T_new_view = T_C_W_new * view.T_W_C;
+    for (int row = 0; row < k.height; row += stride) {
+      for (int col = 0; col < k.width; col += stride) {
+        const std::uint16_t measured =
+            (*view.depth_mm)[static_cast<std::size_t>(row) * k.width + col];
+        if (measured == 0) continue;
+        const float z_view = 0.001f * measured;
+        const Eigen::Vector3d q_view((col - k.cx) * z_view / k.fx, (row - k.cy) * z_view / k.fy,
+                                     z_view);
+        const Eigen::Vector3d q = T_new_view * q_view;
+        if (q.z() <= 0.05) continue;
+        const double u = intrinsics.fx * q.x() / q.z() + intrinsics.cx;
+        const double v = intrinsics.fy * q.y() / q.z() + intrinsics.cy;
+        if (Judge(depth_mm, depth.width, depth.height, u, v, static_cast<float>(q.z()), config) !=
+            Verdict::kInFront) {
+          continue;
+        }
+        const int r = static_cast<int>(std::lround(v)) / stride;
+        const int c = static_cast<int>(std::lround(u)) / stride;
+        if (r >= 0 && c >= 0 && r < rows && c < cols) {
+          changed[static_cast<std::size_t>(r) * cols + c] = 1;
+        }
       }
     }
   }
   if (coverage.depth_pixels == 0) return coverage;
   coverage.explained_fraction = static_cast<float>(explained) / coverage.depth_pixels;
-  coverage.largest_contradicted_patch_px =
-      static_cast<float>(LargestPatch(std::move(contradicted), cols, rows)) * stride * stride;
+  coverage.largest_changed_patch_px =
+      static_cast<float>(LargestPatch(std::move(changed), cols, rows)) * stride * stride;
   int best = 0;
   for (const auto& [id, count] : explained_by) {
     if (count > best) {
@@ -167,10 +227,82 @@ ViewCoverage CoverageOf(const DepthImage& depth, const CameraIntrinsics& intrins
   }
   const float depth_fraction =
       static_cast<float>(coverage.depth_pixels) / (static_cast<float>(cols) * rows);
-  coverage.repeated = depth_fraction >= config.min_depth_fraction &&
-                      coverage.explained_fraction >= config.min_explained_fraction &&
-                      coverage.largest_contradicted_patch_px <= config.max_contradicted_patch_px;
+  const bool unchanged = depth_fraction >= config.min_depth_fraction &&
+                         coverage.largest_changed_patch_px <= config.max_changed_patch_px;
+  coverage.repeated = unchanged && coverage.explained_fraction >= config.min_explained_fraction;
+  coverage.repeated_in_part = unchanged && !coverage.repeated &&
+                              coverage.explained_fraction >= config.min_partial_explained_fraction;
   return coverage;
+}
+
+void KeepUnexplained(const ViewCoverage& coverage, const std::vector<BoundingBox2D>& boxes,
+                     const RevisitThinningConfig& config, DepthImage* depth) {
+  if (coverage.grid_cols <= 0 || coverage.stride <= 0) return;
+  const int stride = coverage.stride;
+  auto sample = [&](int row, int col) {
+    const int r = std::min(row / stride, coverage.grid_rows - 1);
+    const int c = std::min(col / stride, coverage.grid_cols - 1);
+    return static_cast<std::size_t>(r) * coverage.grid_cols + c;
+  };
+  auto has_depth = [&](int row, int col) {
+    const float z = depth->depth_m[static_cast<std::size_t>(row) * depth->width + col];
+    return std::isfinite(z) && z > 0.f;
+  };
+  // The boxes kept whole (1) or left out whole (2), judged on the compared pixels (those that
+  // start a block): a part of a box would be segmented as a fragment of its object.
+  std::vector<std::uint8_t> keep(depth->depth_m.size(), 0);
+  std::vector<BoundingBox2D> left_out;
+  for (const BoundingBox2D& box : boxes) {
+    const int col_min = std::max(0, static_cast<int>(std::floor(box.x_min)));
+    const int row_min = std::max(0, static_cast<int>(std::floor(box.y_min)));
+    const int col_max = std::min(depth->width - 1, static_cast<int>(std::ceil(box.x_max)));
+    const int row_max = std::min(depth->height - 1, static_cast<int>(std::ceil(box.y_max)));
+    int compared = 0, fresh = 0;
+    for (int row = row_min; row <= row_max; ++row) {
+      if (row % stride != 0) continue;
+      for (int col = col_min; col <= col_max; ++col) {
+        if (col % stride != 0 || !has_depth(row, col)) continue;
+        ++compared;
+        fresh += coverage.explained[sample(row, col)] == 0;
+      }
+    }
+    if (compared == 0) continue;
+    if (fresh < config.min_new_fraction_in_box * compared) {
+      left_out.push_back(box);
+      continue;
+    }
+    // With the surface around it: the segmentation tells the object from its support by the
+    // plane it stands on.
+    const int margin_cols = static_cast<int>(config.box_margin * (col_max - col_min));
+    const int margin_rows = static_cast<int>(config.box_margin * (row_max - row_min));
+    const int keep_col_min = std::max(0, col_min - margin_cols);
+    const int keep_col_max = std::min(depth->width - 1, col_max + margin_cols);
+    for (int row = std::max(0, row_min - margin_rows);
+         row <= std::min(depth->height - 1, row_max + margin_rows); ++row) {
+      std::fill(keep.begin() + static_cast<std::ptrdiff_t>(row) * depth->width + keep_col_min,
+                keep.begin() + static_cast<std::ptrdiff_t>(row) * depth->width + keep_col_max + 1,
+                1);
+    }
+  }
+  for (const BoundingBox2D& box : left_out) {
+    const int col_min = std::max(0, static_cast<int>(std::floor(box.x_min)));
+    const int col_max = std::min(depth->width - 1, static_cast<int>(std::ceil(box.x_max)));
+    for (int row = std::max(0, static_cast<int>(std::floor(box.y_min)));
+         row <= std::min(depth->height - 1, static_cast<int>(std::ceil(box.y_max))); ++row) {
+      for (int col = col_min; col <= col_max; ++col) {
+        std::uint8_t& mark = keep[static_cast<std::size_t>(row) * depth->width + col];
+        if (mark == 0) mark = 2;
+      }
+    }
+  }
+  for (int row = 0; row < depth->height; ++row) {
+    for (int col = 0; col < depth->width; ++col) {
+      const std::size_t i = static_cast<std::size_t>(row) * depth->width + col;
+      if (keep[i] == 2 || (keep[i] == 0 && coverage.explained[sample(row, col)] != 0)) {
+        depth->depth_m[i] = 0.f;
+      }
+    }
+  }
 }
 
 }  // namespace objmap

@@ -6,7 +6,7 @@
 
 namespace objmap {
 
-std::optional<StoredRevisit> MapServer::Impl::RepeatedView(const MapJob& job) const {
+std::optional<MapServer::Impl::Repeated> MapServer::Impl::RepeatedView(const MapJob& job) const {
   const RevisitThinningConfig& thinning = config.thinning;
   if (!thinning.enabled || job.frame.depth.empty()) return std::nullopt;
   std::set<KeyframeId> stored;
@@ -37,17 +37,22 @@ std::optional<StoredRevisit> MapServer::Impl::RepeatedView(const MapJob& job) co
     const KeyframeRecord* record = mapper->FindKeyframe(id);
     views.push_back(StoredView{id, record->T_W_C, &record->intrinsics, &record->depth_mm});
   }
-  const ViewCoverage coverage =
+  ViewCoverage coverage =
       CoverageOf(job.frame.depth, job.frame.intrinsics, job.frame.T_W_C, views, thinning);
-  if (!coverage.repeated || coverage.best_keyframe == 0) return std::nullopt;
-  StoredRevisit revisit;
+  if ((!coverage.repeated && !coverage.repeated_in_part) || coverage.best_keyframe == 0) {
+    return std::nullopt;
+  }
+  Repeated repeated;
+  repeated.whole = coverage.repeated;
+  StoredRevisit& revisit = repeated.revisit;
   revisit.session_id = job.session.id;
   revisit.stamp_s = job.frame.stamp_s;
   revisit.name = job.frame.name;
   revisit.keyframe_id = coverage.best_keyframe;
   revisit.T_K_C = mapper->FindKeyframe(coverage.best_keyframe)->T_W_C.inverse() * job.frame.T_W_C;
   revisit.explained_fraction = coverage.explained_fraction;
-  return revisit;
+  repeated.coverage = std::move(coverage);
+  return repeated;
 }
 
 MapJob::Result MapServer::Impl::ApplyRevisit(MapJob* job, StoredRevisit revisit) {

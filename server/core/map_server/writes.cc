@@ -115,7 +115,7 @@ ServiceStatus MapServer::AddKeyframe(RgbdFrame frame,
   outcome->relocalized = placed_session_frame;
   if (!impl_->odometry) return result.status;
   // A revisit is no keyframe of the map: it follows the keyframe it repeated, not the odometry.
-  if (outcome->repeated_keyframe == 0) {
+  if (outcome->keyframe_id != 0) {
     impl_->tracked_keyframes.Add(outcome->keyframe_id, tracked, *impl_->odometry);
   }
   outcome->loops_closed = tracked.loops_closed;
@@ -172,7 +172,7 @@ ServiceStatus MapServer::Impl::MapHeld(int fragment, std::vector<KeyframeId>* ma
       return {result.status.code, "a held keyframe of the part just placed (" +
                                       held.job->frame.name + "): " + result.status.message};
     }
-    if (result.keyframe.repeated_keyframe != 0) continue;  // kept as a revisit
+    if (result.keyframe.keyframe_id == 0) continue;  // kept as a revisit only
     tracked_keyframes.AddRelative(result.keyframe.keyframe_id, held.odometry_keyframe, held.T_K_C);
     mapped->push_back(result.keyframe.keyframe_id);
   }
