@@ -408,6 +408,10 @@ nlohmann::ordered_json Point(const Eigen::Vector3d& p) { return {p.x(), p.y(), p
 }  // namespace
 
 bool RevisitConfig::IsValid(std::string* why) const {
+  if (!(patrol_offset_m >= 0.0) || !(patrol_offset_deg >= 0.0)) {
+    *why = "revisit: patrol_offset_m and patrol_offset_deg must be >= 0";
+    return false;
+  }
   if (removed < 0 || moved < 0 || added < 0 || !(min_move_m > 0.0) ||
       !(min_view_fraction > 0.0 && min_view_fraction <= 1.0) || !(max_view_m > 0.0)) {
     *why =
@@ -430,9 +434,11 @@ bool MakeRevisit(const Scene& first, const RevisitConfig& config, std::uint64_t 
   if (!FindRoomLayout(first, &layout, why)) return false;
   Random path_random(seed, 0x7AC3ull);
   std::vector<Eigen::Isometry3d> trajectory =
-      RevisitTrajectory(first.trajectory, layout.supports[0], frames, &path_random);
-  if (!Elsewhere(trajectory.front(), first.trajectory.front()) ||
-      !Elsewhere(trajectory.front(), first.trajectory.back())) {
+      config.patrol ? PatrolTrajectory(first.trajectory, frames, config.patrol_offset_m,
+                                       config.patrol_offset_deg, &path_random)
+                    : RevisitTrajectory(first.trajectory, layout.supports[0], frames, &path_random);
+  if (!config.patrol && (!Elsewhere(trajectory.front(), first.trajectory.front()) ||
+                         !Elsewhere(trajectory.front(), first.trajectory.back()))) {
     *why = "the second trajectory would start where the first starts or ends";
     return false;
   }

@@ -28,6 +28,13 @@ struct RevisitConfig {
   /// 10 of them where it has as many: a change the second session cannot see is not scored.
   double min_view_fraction = 0.4;
   double max_view_m = 4.0;
+  /// The second session's path: false, it starts over the middle of the first sweep, farther
+  /// away and higher, and swings across the room (RevisitTrajectory); true, it drives the first
+  /// session's path again a little to one side (PatrolTrajectory, within patrol_offset_m and
+  /// patrol_offset_deg), as a robot on a patrol route does.
+  bool patrol = false;
+  double patrol_offset_m = 0.03;
+  double patrol_offset_deg = 2.0;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };

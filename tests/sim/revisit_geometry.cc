@@ -197,4 +197,41 @@ std::vector<Eigen::Isometry3d> RevisitTrajectory(const std::vector<Eigen::Isomet
   return poses;
 }
 
+std::vector<Eigen::Isometry3d> PatrolTrajectory(const std::vector<Eigen::Isometry3d>& first,
+                                                int frames, double offset_m, double offset_deg,
+                                                Random* random) {
+  std::vector<Eigen::Isometry3d> poses;
+  if (first.empty() || frames < 1) return poses;
+  // One slow wave per axis, with its own phase and about one period over the path.
+  double phase[6], period[6];
+  for (int axis = 0; axis < 6; ++axis) {
+    phase[axis] = random->Uniform(0.0, 2.0 * M_PI);
+    period[axis] = random->Uniform(0.7, 1.4);
+  }
+  auto wave = [&](int axis, double s) {
+    return std::sin(2.0 * M_PI * s / period[axis] + phase[axis]);
+  };
+  const double offset_rad = offset_deg * M_PI / 180.0;
+  for (int i = 0; i < frames; ++i) {
+    const double s = frames > 1 ? static_cast<double>(i) / (frames - 1) : 0.0;
+    // The pose of the first path at s, between its two nearest poses.
+    const double at = s * static_cast<double>(first.size() - 1);
+    const std::size_t k = std::min(static_cast<std::size_t>(at), first.size() - 1);
+    const std::size_t next = std::min(k + 1, first.size() - 1);
+    const double t = at - static_cast<double>(k);
+    const Eigen::Quaterniond q_a(first[k].linear()), q_b(first[next].linear());
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.linear() = q_a.slerp(t, q_b).toRotationMatrix();
+    pose.translation() = (1.0 - t) * first[k].translation() + t * first[next].translation();
+    pose.translation() += offset_m * Eigen::Vector3d(wave(0, s), wave(1, s), 0.5 * wave(2, s));
+    // Turned a little about the world's vertical and the camera's own axes.
+    pose.linear() = Eigen::AngleAxisd(offset_rad * wave(3, s), Eigen::Vector3d::UnitZ()) *
+                    pose.linear() *
+                    Eigen::AngleAxisd(0.5 * offset_rad * wave(4, s), Eigen::Vector3d::UnitX()) *
+                    Eigen::AngleAxisd(0.5 * offset_rad * wave(5, s), Eigen::Vector3d::UnitY());
+    poses.push_back(pose);
+  }
+  return poses;
+}
+
 }  // namespace objmap::sim

@@ -63,4 +63,11 @@ struct RoomLayout {
     const std::vector<Eigen::Isometry3d>& first, const SupportSurface& floor, int frames,
     Random* random);
 
+/// The first session's path driven again, as a robot on a patrol route does: `frames` poses
+/// along it, each off by a slow drift of up to `offset_m` and `offset_deg` (not frame-to-frame
+/// noise: a route followed a little to one side). Empty when `first` is.
+[[nodiscard]] std::vector<Eigen::Isometry3d> PatrolTrajectory(
+    const std::vector<Eigen::Isometry3d>& first, int frames, double offset_m, double offset_deg,
+    Random* random);
+
 }  // namespace objmap::sim

@@ -318,6 +318,44 @@ TEST(SimRevisit, TheSameSeedGivesTheSameChangesAndBadRequestsAreRefused) {
   EXPECT_NE(why.find("to remove"), std::string::npos) << why;
 }
 
+// A patrol drives the first path again, each pose within the configured drift of the first
+// session's pose at the same point of the path, and still gets its changes where it sees them.
+TEST(SimRevisit, APatrolDrivesTheFirstPathAgainALittleToOneSide) {
+  for (const std::string& kind : SceneKinds()) {
+    SCOPED_TRACE(kind);
+    Scene first, second;
+    SceneChanges changes;
+    std::string why;
+    ASSERT_TRUE(MakeScene(kind, 2, kFrames, &first, &why)) << why;
+    RevisitConfig patrol;
+    patrol.patrol = true;
+    ASSERT_TRUE(MakeRevisit(first, patrol, 7, kFrames, &second, &changes, &why)) << why;
+    ASSERT_EQ(second.trajectory.size(), first.trajectory.size());
+    double largest_m = 0.0, largest_deg = 0.0;
+    for (std::size_t i = 0; i < first.trajectory.size(); ++i) {
+      const Eigen::Isometry3d relative = first.trajectory[i].inverse() * second.trajectory[i];
+      largest_m = std::max(largest_m, relative.translation().norm());
+      largest_deg =
+          std::max(largest_deg, Eigen::AngleAxisd(relative.linear()).angle() * 180.0 / M_PI);
+    }
+    // Within the drift (3 cm on two axes and half of it on the third; 2 degrees and two halves).
+    EXPECT_LE(largest_m, 1.6 * patrol.patrol_offset_m);
+    EXPECT_GT(largest_m, 0.3 * patrol.patrol_offset_m);  // driven to one side, not replayed
+    EXPECT_LE(largest_deg, 1.5 * patrol.patrol_offset_deg);
+    EXPECT_EQ(changes.removed.size(), 3u);
+    EXPECT_EQ(changes.added.size(), 3u);
+  }
+  RevisitConfig negative;
+  negative.patrol = true;
+  negative.patrol_offset_m = -0.1;
+  Scene first, second;
+  SceneChanges changes;
+  std::string why;
+  ASSERT_TRUE(MakeScene("desk", 2, kFrames, &first, &why)) << why;
+  EXPECT_FALSE(MakeRevisit(first, negative, 7, kFrames, &second, &changes, &why));
+  EXPECT_NE(why.find("patrol_offset_m"), std::string::npos) << why;
+}
+
 TEST(SimRevisit, TheSecondSessionIsWrittenWithItsChanges) {
   constexpr int kFewFrames = 25;
   Scene first, second;

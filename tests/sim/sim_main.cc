@@ -16,7 +16,8 @@ constexpr char kUsage[] =
     "usage: objmap_sim --out DIR [--kind desk|office|kitchen|lab] [--seed N] [--frames N] "
     "[--perfect]\n"
     "                  [--drift] [--procedural]\n"
-    "                  [--revisit DIR2 [--removed N] [--moved N] [--added N] [--revisit-seed N]]\n"
+    "                  [--revisit DIR2 [--removed N] [--moved N] [--added N] [--revisit-seed N]\n"
+    "                   [--patrol]]\n"
     "       objmap_sim --out DIR --scene scene.json [--perfect] [--drift] [--procedural]\n"
     "  writes DIR/frame-NNNNNN.{color,depth,instance}.png and .pose.txt, camera-intrinsics.txt,\n"
     "  detections.json (the ground-truth detector) and ground_truth.json\n"
@@ -39,7 +40,9 @@ constexpr char kUsage[] =
     "               (box centres, metres). Its camera starts over the middle of the first sweep,\n"
     "               farther and higher, and sweeps to both sides; as many frames as --frames\n"
     "  --removed N, --moved N, --added N  changes of each kind (default 3 each)\n"
-    "  --revisit-seed N  picks the changes and the second trajectory (default: --seed + 1)\n";
+    "  --revisit-seed N  picks the changes and the second trajectory (default: --seed + 1)\n"
+    "  --patrol     the second session drives the first one's path again, a few centimetres and\n"
+    "               degrees to one side (a patrol route), instead of starting elsewhere\n";
 
 }  // namespace
 
@@ -76,6 +79,9 @@ int main(int argc, char** argv) {
     } else if (arg == "--added" && has_value) {
       revisit.added = std::atoi(argv[++i]);
       revisit_option_given = true;
+    } else if (arg == "--patrol") {
+      revisit.patrol = true;
+      revisit_option_given = true;
     } else if (arg == "--revisit-seed" && has_value) {
       revisit_seed = std::strtoull(argv[++i], nullptr, 10);
       revisit_seed_given = revisit_option_given = true;
@@ -98,7 +104,8 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (revisit_out.empty() && revisit_option_given) {
-    std::cerr << "objmap_sim: --removed, --moved, --added and --revisit-seed need --revisit DIR2\n"
+    std::cerr << "objmap_sim: --removed, --moved, --added, --revisit-seed and --patrol need "
+                 "--revisit DIR2\n"
               << kUsage;
     return 2;
   }
