@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <iostream>
 #include <map>
 
 #include "dataset/sequence_reader.h"
@@ -280,6 +281,35 @@ class Relocalisation : public ::testing::Test {
   std::unique_ptr<SequenceReader> reader_;
   std::size_t first_mapped_ = 0;
 };
+
+// A restart that drives the first session's frames again (a patrol): its keyframes repeat the
+// stored views and are kept as revisits, and the loops they close to the saved map (with no
+// keyframe of the session mapped yet to move) are no error.
+TEST_F(Relocalisation, ASessionDrivingTheSameRouteAgainIsKeptAsRevisits) {
+  if (!OpenSequenceOrSkip()) GTEST_SKIP() << "SKIPPED: ../shared/data/redkitchen is absent";
+  {
+    auto server = OpenServer();
+    ASSERT_TRUE(server);
+    MapFrames(server.get(), 0, 150, 6);
+  }
+  auto server = OpenServer();
+  ASSERT_TRUE(server);
+  const std::size_t keyframes_before = server->Status().keyframes;
+  int revisits = 0, loops = 0, sent = 0;
+  for (std::size_t index = 0; index <= 150; index += 6, ++sent) {
+    AddKeyframeOutcome outcome;
+    const ServiceStatus status =
+        server->AddKeyframe(Frame(index), std::vector<Detection>{}, &outcome);
+    ASSERT_TRUE(status.ok()) << "frame " << index << ": " << status.message;
+    revisits += outcome.keyframe_id == 0;
+    loops += outcome.loops_closed;
+  }
+  EXPECT_GE(revisits, sent / 2) << revisits << " of " << sent << " kept as revisits";
+  EXPECT_EQ(server->Status().keyframes,
+            keyframes_before + static_cast<std::size_t>(sent - revisits));
+  std::cout << revisits << " of " << sent << " keyframes kept as revisits, " << loops
+            << " loops closed" << std::endl;
+}
 
 TEST_F(Relocalisation, ASessionStartingElsewhereInTheMapIsPlacedAndMapsEveryKeyframe) {
   if (!OpenSequenceOrSkip()) GTEST_SKIP() << "SKIPPED: ../shared/data/redkitchen is absent";

@@ -121,10 +121,13 @@ ServiceStatus MapServer::AddKeyframe(RgbdFrame frame,
   outcome->loops_closed = tracked.loops_closed;
   outcome->relocalized = tracked.status == TrackingStatus::kRelocalized;
   if (tracked.loops_closed == 0) return result.status;
-  // A loop closed: every tracked keyframe follows the odometry keyframe it was tracked against.
+  // A loop closed: every tracked keyframe follows the odometry keyframe it was tracked against
+  // (none, while every keyframe of the session so far was a revisit of a stored view).
+  const std::map<KeyframeId, Eigen::Isometry3d> moved =
+      impl_->tracked_keyframes.Poses(*impl_->odometry);
+  if (moved.empty()) return result.status;
   PoseUpdateOutcome update;
-  const ServiceStatus updated =
-      UpdatePoses(impl_->tracked_keyframes.Poses(*impl_->odometry), /*wait=*/false, &update);
+  const ServiceStatus updated = UpdatePoses(moved, /*wait=*/false, &update);
   if (!updated.ok()) {
     return {updated.code, "keyframe " + std::to_string(outcome->keyframe_id) +
                               " is mapped, but the poses of the loop it closed are not: " +
