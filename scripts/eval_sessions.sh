@@ -5,7 +5,8 @@
 # Defaults: ../shared/data/redkitchen, frames 0..449 as session 1, then a server restart, then
 # 550..999 as session 2 (the camera starts where session 1 never was at its end). The single
 # session maps 0..999. Printed: keyframes sent and mapped per session, whether session 2's first
-# keyframe was placed (the sessions table), the ATE of session 2's keyframes
+# keyframe was placed (the sessions table, with the keyframes kept as revisits of unchanged
+# views), the database's size after each session, the ATE of session 2's keyframes
 # in both maps (TUM alignment over those keyframes, against the dataset's poses), and both
 # inventories.
 set -euo pipefail
@@ -84,6 +85,7 @@ start_server "${WORK}/two.db"
 "${OBJMAP}" ingest "${DATASET}" --server "${ADDRESS}" --max-frames "$((FIRST_END + 1))" \
   | tail -2
 stop_server
+echo "database after session 1: $(stat -c %s "${WORK}/two.db") bytes"
 start_server "${WORK}/two.db"
 start_s=$(date +%s.%N)
 "${OBJMAP}" ingest "${DATASET}" --server "${ADDRESS}" --first-frame "${SECOND_START}" \
@@ -93,6 +95,7 @@ echo "session 2 ingest took $(echo "$(date +%s.%N) - ${start_s}" | bc) s"
 "${OBJMAP}" keyframes --server "${ADDRESS}" --out "${WORK}/two.keyframes"
 "${OBJMAP}" inventory --server "${ADDRESS}" > "${WORK}/two.inventory"
 stop_server
+echo "database after session 2: $(stat -c %s "${WORK}/two.db") bytes"
 
 echo "== one session: frames 0..$((FRAMES - 1))"
 start_server "${WORK}/one.db"
