@@ -8,7 +8,7 @@
 # keyframe was placed (the sessions table, with the keyframes kept as revisits of unchanged
 # views), the database's size after each session, the ATE of session 2's keyframes
 # in both maps (TUM alignment over those keyframes, against the dataset's poses), and both
-# inventories.
+# inventories. OBJMAP_SERVER_FLAGS: more objmap_server flags (--set thinning.enabled=false ...).
 set -euo pipefail
 
 readonly ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -26,7 +26,9 @@ SERVER_PID=""
 # Starts objmap_server with estimated poses on database $1; sets ADDRESS.
 start_server() {
   local log="${WORK}/server.$(basename "$1").$(date +%s%N).log"
-  "${SERVER}" --db "$1" --listen 127.0.0.1:0 --set server.pose_source=estimate >"${log}" 2>&1 &
+  # shellcheck disable=SC2086
+  "${SERVER}" --db "$1" --listen 127.0.0.1:0 --set server.pose_source=estimate \
+    ${OBJMAP_SERVER_FLAGS:-} >"${log}" 2>&1 &
   SERVER_PID=$!
   for _ in $(seq 1 600); do
     ADDRESS="$(sed -n 's/.*listening on \([0-9.:]*\).*/\1/p' "${log}" | head -1)"
