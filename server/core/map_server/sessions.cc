@@ -230,4 +230,29 @@ ServiceStatus MapServer::StartTrackingOnStoredMap(RgbdOdometry* odometry,
   return ServiceStatus::Ok();
 }
 
+std::vector<StoredSession> MapServer::Impl::SessionsToStore(const StoredSession& session,
+                                                            std::vector<StoredSession>* ends) {
+  // The session is stored with its first keyframe (or revisit), and the ends of the sessions
+  // before it that are stored.
+  std::vector<StoredSession> sessions;
+  std::lock_guard<std::mutex> lock(session_mutex);
+  if (stored_sessions.count(session.id) == 0) sessions.push_back(session);
+  for (const StoredSession& ended : ended_sessions) {
+    if (stored_sessions.count(ended.id) > 0) ends->push_back(ended);
+  }
+  sessions.insert(sessions.end(), ends->begin(), ends->end());
+  return sessions;
+}
+
+void MapServer::Impl::SessionsStored(SessionId session_id, const std::vector<StoredSession>& ends) {
+  std::lock_guard<std::mutex> lock(session_mutex);
+  stored_sessions.insert(session_id);
+  for (const StoredSession& stored_end : ends) {
+    ended_sessions.erase(
+        std::remove_if(ended_sessions.begin(), ended_sessions.end(),
+                       [&](const StoredSession& s) { return s.id == stored_end.id; }),
+        ended_sessions.end());
+  }
+}
+
 }  // namespace objmap
