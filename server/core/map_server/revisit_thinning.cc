@@ -4,6 +4,8 @@
 #include <cmath>
 #include <map>
 
+#include "mapper/mapper.h"
+
 namespace objmap {
 
 bool RevisitThinningConfig::IsValid(std::string* why) const {
@@ -59,24 +61,30 @@ float MarginMm(float z, const RevisitThinningConfig& config) {
   return 1000.f * (config.depth_margin_m + config.depth_margin_per_m2 * z * z);
 }
 
-// The verdict of the depth image (millimetres, row-major) on a point at depth z projecting to
-// (u, v), at that pixel and its 8 neighbours (depth edges move by a pixel between views): in
-// front only when every neighbour with depth measured beyond it.
-Verdict Judge(const std::vector<std::uint16_t>& depth_mm, int width, int height, double u, double v,
-              float z, const RevisitThinningConfig& config) {
-  const int col = static_cast<int>(std::lround(u));
-  const int row = static_cast<int>(std::lround(v));
-  if (col < 0 || row < 0 || col >= width || row >= height) return Verdict::kUnseen;
+// The verdict of a camera's depth image (millimetres, row-major, `k`-sized) on the point p_C
+// of its own frame, at the pixel it projects to and that pixel's 8 neighbours (depth edges move
+// by a pixel between views): in front only when every neighbour with depth measured beyond it.
+// The pixel goes to `col`, `row` (may be null) when the point projects into the image.
+Verdict Judge(const std::vector<std::uint16_t>& depth_mm, const CameraIntrinsics& k,
+              const Eigen::Vector3d& p_C, const RevisitThinningConfig& config,
+              int* col_out = nullptr, int* row_out = nullptr) {
+  if (p_C.z() <= 0.05) return Verdict::kUnseen;
+  const int col = static_cast<int>(std::lround(k.fx * p_C.x() / p_C.z() + k.cx));
+  const int row = static_cast<int>(std::lround(k.fy * p_C.y() / p_C.z() + k.cy));
+  if (col < 0 || row < 0 || col >= k.width || row >= k.height) return Verdict::kUnseen;
+  if (col_out != nullptr) *col_out = col;
+  if (row_out != nullptr) *row_out = row;
+  const float z = static_cast<float>(p_C.z());
   const float margin_mm = MarginMm(z, config);
   const float z_mm = 1000.f * z;
   bool measured_any = false, all_beyond = true;
   for (int dr = -1; dr <= 1; ++dr) {
     const int r = row + dr;
-    if (r < 0 || r >= height) continue;
+    if (r < 0 || r >= k.height) continue;
     for (int dc = -1; dc <= 1; ++dc) {
       const int c = col + dc;
-      if (c < 0 || c >= width) continue;
-      const std::uint16_t measured = depth_mm[static_cast<std::size_t>(r) * width + c];
+      if (c < 0 || c >= k.width) continue;
+      const std::uint16_t measured = depth_mm[static_cast<std::size_t>(r) * k.width + c];
       if (measured == 0) continue;
       measured_any = true;
       const float difference = static_cast<float>(measured) - z_mm;
@@ -87,16 +95,16 @@ Verdict Judge(const std::vector<std::uint16_t>& depth_mm, int width, int height,
   return measured_any && all_beyond ? Verdict::kInFront : Verdict::kUnseen;
 }
 
-// `view`'s verdict on the point p_W.
-Verdict JudgeInView(const StoredView& view, const Eigen::Isometry3d& T_C_W,
-                    const Eigen::Vector3d& p_W, const RevisitThinningConfig& config) {
-  const Eigen::Vector3d p_C = T_C_W * p_W;
-  if (p_C.z() <= 0.05) return Verdict::kUnseen;
-  const CameraIntrinsics& intrinsics = *view.intrinsics;
-  return Judge(*view.depth_mm, intrinsics.width, intrinsics.height,
-               intrinsics.fx * p_C.x() / p_C.z() + intrinsics.cx,
-               intrinsics.fy * p_C.y() / p_C.z() + intrinsics.cy, static_cast<float>(p_C.z()),
-               config);
+// A box's pixels (inclusive), within an image of this size.
+struct PixelRect {
+  int col_min = 0, row_min = 0, col_max = -1, row_max = -1;
+};
+
+PixelRect Clamped(const BoundingBox2D& box, int width, int height) {
+  return {std::max(0, static_cast<int>(std::floor(box.x_min))),
+          std::max(0, static_cast<int>(std::floor(box.y_min))),
+          std::min(width - 1, static_cast<int>(std::ceil(box.x_max))),
+          std::min(height - 1, static_cast<int>(std::ceil(box.y_max)))};
 }
 
 // The size (in samples) of the largest 8-connected set of true cells of a grid.
@@ -163,7 +171,8 @@ ViewCoverage CoverageOf(const DepthImage& depth, const CameraIntrinsics& intrins
       const Eigen::Vector3d p_W = T_W_C * p_C;
       bool found = false, put_down = false;
       for (std::size_t i = 0; i < views.size() && !found; ++i) {
-        const Verdict verdict = JudgeInView(views[i], T_C_W[i], p_W, config);
+        const Verdict verdict =
+            Judge(*views[i].depth_mm, *views[i].intrinsics, T_C_W[i] * p_W, config);
         if (verdict == Verdict::kExplained) {
           found = true;
           ++explained_by[views[i].keyframe_id];
@@ -179,13 +188,7 @@ ViewCoverage CoverageOf(const DepthImage& depth, const CameraIntrinsics& intrins
     }
   }
   // Taken away: the stored views' points, judged by the new keyframe's depth in millimetres.
-  std::vector<std::uint16_t> depth_mm(depth.depth_m.size(), 0);
-  for (std::size_t i = 0; i < depth_mm.size(); ++i) {
-    const float z = depth.depth_m[i];
-    if (std::isfinite(z) && z > 0.f && z < 65.f) {
-      depth_mm[i] = static_cast<std::uint16_t>(std::lround(z * 1000.f));
-    }
-  }
+  const std::vector<std::uint16_t> depth_mm = DepthMillimetres(depth);
   const Eigen::Isometry3d T_C_W_new = T_W_C.inverse();
   for (const StoredView& view : views) {
     const CameraIntrinsics& k = *view.intrinsics;
@@ -198,18 +201,10 @@ ViewCoverage CoverageOf(const DepthImage& depth, const CameraIntrinsics& intrins
         const float z_view = 0.001f * measured;
         const Eigen::Vector3d q_view((col - k.cx) * z_view / k.fx, (row - k.cy) * z_view / k.fy,
                                      z_view);
-        const Eigen::Vector3d q = T_new_view * q_view;
-        if (q.z() <= 0.05) continue;
-        const double u = intrinsics.fx * q.x() / q.z() + intrinsics.cx;
-        const double v = intrinsics.fy * q.y() / q.z() + intrinsics.cy;
-        if (Judge(depth_mm, depth.width, depth.height, u, v, static_cast<float>(q.z()), config) !=
+        int new_col = 0, new_row = 0;
+        if (Judge(depth_mm, intrinsics, T_new_view * q_view, config, &new_col, &new_row) ==
             Verdict::kInFront) {
-          continue;
-        }
-        const int r = static_cast<int>(std::lround(v)) / stride;
-        const int c = static_cast<int>(std::lround(u)) / stride;
-        if (r >= 0 && c >= 0 && r < rows && c < cols) {
-          changed[static_cast<std::size_t>(r) * cols + c] = 1;
+          changed[static_cast<std::size_t>(new_row / stride) * cols + new_col / stride] = 1;
         }
       }
     }
@@ -251,12 +246,10 @@ void KeepUnexplained(const ViewCoverage& coverage, const std::vector<BoundingBox
   // The boxes kept whole (1) or left out whole (2), judged on the compared pixels (those that
   // start a block): a part of a box would be segmented as a fragment of its object.
   std::vector<std::uint8_t> keep(depth->depth_m.size(), 0);
-  std::vector<BoundingBox2D> left_out;
+  std::vector<PixelRect> left_out;
   for (const BoundingBox2D& box : boxes) {
-    const int col_min = std::max(0, static_cast<int>(std::floor(box.x_min)));
-    const int row_min = std::max(0, static_cast<int>(std::floor(box.y_min)));
-    const int col_max = std::min(depth->width - 1, static_cast<int>(std::ceil(box.x_max)));
-    const int row_max = std::min(depth->height - 1, static_cast<int>(std::ceil(box.y_max)));
+    const PixelRect rect = Clamped(box, depth->width, depth->height);
+    const auto [col_min, row_min, col_max, row_max] = rect;
     int compared = 0, fresh = 0;
     for (int row = row_min; row <= row_max; ++row) {
       if (row % stride != 0) continue;
@@ -268,7 +261,7 @@ void KeepUnexplained(const ViewCoverage& coverage, const std::vector<BoundingBox
     }
     if (compared == 0) continue;
     if (fresh < config.min_new_fraction_in_box * compared) {
-      left_out.push_back(box);
+      left_out.push_back(rect);
       continue;
     }
     // With the surface around it: the segmentation tells the object from its support by the
@@ -284,12 +277,9 @@ void KeepUnexplained(const ViewCoverage& coverage, const std::vector<BoundingBox
                 1);
     }
   }
-  for (const BoundingBox2D& box : left_out) {
-    const int col_min = std::max(0, static_cast<int>(std::floor(box.x_min)));
-    const int col_max = std::min(depth->width - 1, static_cast<int>(std::ceil(box.x_max)));
-    for (int row = std::max(0, static_cast<int>(std::floor(box.y_min)));
-         row <= std::min(depth->height - 1, static_cast<int>(std::ceil(box.y_max))); ++row) {
-      for (int col = col_min; col <= col_max; ++col) {
+  for (const PixelRect& rect : left_out) {
+    for (int row = rect.row_min; row <= rect.row_max; ++row) {
+      for (int col = rect.col_min; col <= rect.col_max; ++col) {
         std::uint8_t& mark = keep[static_cast<std::size_t>(row) * depth->width + col];
         if (mark == 0) mark = 2;
       }

@@ -70,16 +70,21 @@ DepthScanW DepthScanOf(const KeyframeRecord& record) {
   return scan;
 }
 
+std::vector<std::uint16_t> DepthMillimetres(const DepthImage& depth) {
+  std::vector<std::uint16_t> depth_mm(depth.depth_m.size());
+  for (std::size_t i = 0; i < depth_mm.size(); ++i) {
+    const float depth_m = depth.depth_m[i];
+    const bool valid = std::isfinite(depth_m) && depth_m > 0.f && depth_m < 65.f;
+    depth_mm[i] = valid ? static_cast<std::uint16_t>(RoundNonNegative(depth_m * 1000.f)) : 0;
+  }
+  return depth_mm;
+}
+
 KeyframeRecord RecordOf(const RgbdFrame& frame) {
   KeyframeRecord record;
   record.T_W_C = frame.T_W_C;
   record.intrinsics = frame.intrinsics;
-  record.depth_mm.resize(frame.depth.depth_m.size());
-  for (std::size_t i = 0; i < record.depth_mm.size(); ++i) {
-    const float depth_m = frame.depth.depth_m[i];
-    const bool valid = std::isfinite(depth_m) && depth_m > 0.f && depth_m < 65.f;
-    record.depth_mm[i] = valid ? static_cast<std::uint16_t>(RoundNonNegative(depth_m * 1000.f)) : 0;
-  }
+  record.depth_mm = DepthMillimetres(frame.depth);
   record.object_mask.assign(record.depth_mm.size(), 0);
   return record;
 }

@@ -211,6 +211,8 @@ struct KeyframeRecord {
   std::vector<std::uint8_t> object_mask;  ///< row-major, 1: the pixel belongs to an object
 };
 
+/// Depth in millimetres as a keyframe keeps it: 0 where there is none (or beyond 65 m).
+[[nodiscard]] std::vector<std::uint16_t> DepthMillimetres(const DepthImage& depth);
 /// A frame's depth as a keyframe keeps it (millimetres, 0 where there is none), no object pixels.
 [[nodiscard]] KeyframeRecord RecordOf(const RgbdFrame& frame);
 /// A keyframe's depth, pose and object mask as the occupancy map's input.
