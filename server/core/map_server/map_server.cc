@@ -339,6 +339,15 @@ void MapServer::Impl::Publish(std::shared_ptr<const MapSnapshot> next, MapChange
   changes_cv.notify_all();
 }
 
+SnapshotBuilder::Diff MapServer::Impl::PublishVersion(std::uint64_t version, MapChange::Kind kind,
+                                                      KeyframeId keyframe_id) {
+  SnapshotBuilder::Diff diff;
+  auto next = snapshot_builder.Build(*mapper, version, &diff);
+  Publish(std::move(next), MapChange{version, kind, keyframe_id, diff.added, diff.updated,
+                                     diff.removed, diff.object_changes});
+  return diff;
+}
+
 MapJob::Result MapServer::Impl::ApplyKeyframe(MapJob* job) {
   const auto start = Clock::now();
   const std::optional<Repeated> repeated = RepeatedView(*job);
@@ -405,13 +414,7 @@ MapJob::Result MapServer::Impl::ApplyKeyframe(MapJob* job) {
     out.keyframe.repeated_keyframe = revisit.keyframe_id;
     out.keyframe.explained_fraction = revisit.explained_fraction;
   }
-  SnapshotBuilder::Diff diff;
-  auto next = snapshot_builder.Build(*mapper, job->version, &diff);
-  MapChange map_change{job->version,       MapChange::Kind::kKeyframeAdded,
-                       result.keyframe_id, diff.added,
-                       diff.updated,       diff.removed,
-                       diff.object_changes};
-  Publish(std::move(next), std::move(map_change));
+  PublishVersion(job->version, MapChange::Kind::kKeyframeAdded, result.keyframe_id);
 
   ++keyframes_since_checkpoint;
   mapping_ms_since_checkpoint += MillisecondsSince(start);

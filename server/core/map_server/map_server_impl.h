@@ -168,6 +168,10 @@ struct MapServer::Impl {
   void SessionsStored(SessionId session_id, const std::vector<StoredSession>& ends);
   MapJob::Result ApplyPoses(MapJob* job);
   void Publish(std::shared_ptr<const MapSnapshot> next, MapChange change);
+  /// Builds the snapshot of `version` and publishes it with a change of `kind` for
+  /// `keyframe_id`, listing the objects the build found changed; returns what it found.
+  SnapshotBuilder::Diff PublishVersion(std::uint64_t version, MapChange::Kind kind,
+                                       KeyframeId keyframe_id);
   ServiceStatus Enqueue(std::shared_ptr<MapJob> job, bool bounded);
   /// Enqueue with queue_mutex already held by the caller.
   ServiceStatus EnqueueLocked(std::shared_ptr<MapJob> job, bool bounded);

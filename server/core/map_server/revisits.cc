@@ -9,23 +9,23 @@ namespace objmap {
 std::optional<MapServer::Impl::Repeated> MapServer::Impl::RepeatedView(const MapJob& job) const {
   const RevisitThinningConfig& thinning = config.thinning;
   if (!thinning.enabled || job.frame.depth.empty()) return std::nullopt;
-  std::set<KeyframeId> stored;
-  {
-    std::lock_guard<std::mutex> lock(known_mutex);
-    stored = known_keyframes;
-  }
   // Nearest first: camera distance, with a degree of axis angle weighing as much as a cm.
   std::vector<std::pair<double, KeyframeId>> nearby;
-  for (KeyframeId id : stored) {
-    const SessionId session = snapshot_builder.Seen(id).session_id;
-    if (session <= 0 || session >= job.session.id) continue;
-    const KeyframeRecord* record = mapper->FindKeyframe(id);
-    if (record == nullptr || !IsNearbyView(record->T_W_C, job.frame.T_W_C, thinning)) continue;
-    const Eigen::Quaterniond relative(record->T_W_C.linear().transpose() *
-                                      job.frame.T_W_C.linear());
-    const double distance_m = (record->T_W_C.translation() - job.frame.T_W_C.translation()).norm() +
-                              0.01 * Eigen::AngleAxisd(relative).angle() * 180.0 / M_PI;
-    nearby.emplace_back(distance_m, id);
+  {
+    // Scanned under the lock rather than copied out of it: the scan is short.
+    std::lock_guard<std::mutex> lock(known_mutex);
+    for (KeyframeId id : known_keyframes) {
+      const SessionId session = snapshot_builder.Seen(id).session_id;
+      if (session <= 0 || session >= job.session.id) continue;
+      const KeyframeRecord* record = mapper->FindKeyframe(id);
+      if (record == nullptr || !IsNearbyView(record->T_W_C, job.frame.T_W_C, thinning)) continue;
+      const Eigen::Quaterniond relative(record->T_W_C.linear().transpose() *
+                                        job.frame.T_W_C.linear());
+      const double distance_m =
+          (record->T_W_C.translation() - job.frame.T_W_C.translation()).norm() +
+          0.01 * Eigen::AngleAxisd(relative).angle() * 180.0 / M_PI;
+      nearby.emplace_back(distance_m, id);
+    }
   }
   if (nearby.empty()) return std::nullopt;
   std::sort(nearby.begin(), nearby.end());
@@ -71,13 +71,8 @@ MapJob::Result MapServer::Impl::ApplyRevisit(MapJob* job, StoredRevisit revisit)
   }
   SessionsStored(job->session.id, ends);
   snapshot_builder.AddRevisit(revisit.keyframe_id, revisit.session_id, revisit.stamp_s);
-  SnapshotBuilder::Diff diff;
-  auto next = snapshot_builder.Build(*mapper, job->version, &diff);
-  MapChange map_change{job->version,        MapChange::Kind::kKeyframeRepeated,
-                       revisit.keyframe_id, diff.added,
-                       diff.updated,        diff.removed,
-                       diff.object_changes};
-  Publish(std::move(next), std::move(map_change));
+  const SnapshotBuilder::Diff diff =
+      PublishVersion(job->version, MapChange::Kind::kKeyframeRepeated, revisit.keyframe_id);
   out.keyframe.session_id = job->session.id;
   out.keyframe.map_version = job->version;
   out.keyframe.repeated_keyframe = revisit.keyframe_id;
