@@ -8,6 +8,7 @@
 
 #include <algorithm>
 
+#include "mapper/mapper.h"
 #include "test_scenes.h"
 
 namespace objmap {
@@ -25,15 +26,10 @@ class RevisitThinning : public ::testing::Test {
     return testing::RenderFrame(boxes, K_, testing::LookAt(eye, target), "view");
   }
 
-  // Stores `frame` as keyframe `id` and returns it as a stored view (the record is kept).
+  // Stores `frame` as keyframe `id`, as the mapper keeps it, and returns it as a stored view
+  // (the record is kept).
   StoredView Store(std::int64_t id, const RgbdFrame& frame) {
-    KeyframeRecord& record = records_[id];
-    record.T_W_C = frame.T_W_C;
-    record.intrinsics = frame.intrinsics;
-    record.depth_mm.resize(frame.depth.depth_m.size());
-    for (std::size_t i = 0; i < record.depth_mm.size(); ++i) {
-      record.depth_mm[i] = static_cast<std::uint16_t>(std::lround(frame.depth.depth_m[i] * 1000.f));
-    }
+    const KeyframeRecord& record = records_[id] = RecordOf(frame);
     return StoredView{id, record.T_W_C, &record.intrinsics, &record.depth_mm};
   }
 
@@ -41,11 +37,6 @@ class RevisitThinning : public ::testing::Test {
     return CoverageOf(frame.depth, frame.intrinsics, frame.T_W_C, views, config_);
   }
 
-  struct KeyframeRecord {
-    Eigen::Isometry3d T_W_C;
-    CameraIntrinsics intrinsics;
-    std::vector<std::uint16_t> depth_mm;
-  };
   std::map<std::int64_t, KeyframeRecord> records_;
   CameraIntrinsics K_;
   RevisitThinningConfig config_;
