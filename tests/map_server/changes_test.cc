@@ -4,11 +4,13 @@
 // typed changes; a restart (also after kill -9: the store is all there is) lists the same changes.
 
 #include <gtest/gtest.h>
+
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cstdio>
+#include <map>
 
 #include "map_server/map_server.h"
 #include "test_scenes.h"
@@ -170,16 +172,20 @@ TEST_F(MapServerChanges, ARemovedCupIsATombstoneAndAMovedOneKeepsItsId) {
     std::vector<MapObjectChange> none;
     EXPECT_EQ(server->ListChanges(bad, &none, &version).code, StatusCode::kInvalidArgument);
 
-    // WatchMap: every change was sent once, typed, at the version it was first listed.
-    std::size_t watched = 0;
+    // WatchMap: every change was sent once, typed, at the version it was first listed. The cup
+    // at its new place may come first as added (its place was seen empty): until a view sees its
+    // old place empty, it is an arrival, not yet a move.
+    std::map<ObjectChange::Kind, int> watched;
     for (const MapChange& change :
          server->ChangesSince(first_visit_version, std::chrono::milliseconds(100))) {
       for (const MapObjectChange& object_change : change.object_changes) {
         EXPECT_EQ(object_change.version, change.version);
-        ++watched;
+        ++watched[object_change.change.kind];
       }
     }
-    EXPECT_EQ(watched, 2u);
+    EXPECT_EQ(watched[ObjectChange::Kind::kRemoved], 1);
+    EXPECT_EQ(watched[ObjectChange::Kind::kMoved], 1);
+    EXPECT_LE(watched[ObjectChange::Kind::kAdded], 1);
   }
   // The store holds the keyframes and observations: a restart lists the same changes.
   auto restarted = OpenServer();

@@ -106,8 +106,8 @@ void VisitMapModel(MapperConfig* m, Visitor& v) {
   v("min_empty_views", &c.min_empty_views);
   v("max_move_size_ratio", &c.max_move_size_ratio);
   v("min_move_distance_m", &c.min_move_distance_m);
-  v("max_move_colour_distance", &c.max_move_colour_distance);
-  v("move_ambiguity_colour_margin", &c.move_ambiguity_colour_margin);
+  v("min_move_colour_overlap", &c.min_move_colour_overlap);
+  v("move_ambiguity_overlap_margin", &c.move_ambiguity_overlap_margin);
   UnknownObjectConfig& u = m->unknown_objects;
   v.Section("unknown_objects");
   v("enabled", &u.enabled);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <limits>
 #include <tuple>
 
@@ -28,14 +29,26 @@ bool SawItThere(const ObjectVisibility& seen, const ChangeConfig& config) {
   return CouldJudgePlace(seen, config) && seen.empty_fraction < 0.5f * config.min_empty_fraction;
 }
 
+// What a run of views that saw a place empty says, once min_empty_views of them agree.
+enum class EmptyEvidence {
+  // The place is empty now: a later view that sees the object there again cancels the run (it
+  // is back, or never went). Removals are judged so, after an object's last sighting.
+  kLatest,
+  // The place was empty at some time: later views that see the object there do not cancel a
+  // completed run, they only show that it arrived since. Additions are judged so, before an
+  // object's first sighting: the views between its arrival and its first detection see it there
+  // (too far or too small for the detector yet), and say nothing against the empty place before.
+  kEver,
+};
+
 // Scans the keyframes of `visibility` in [from, to) that did not observe the object: counts the
 // independent views that saw its place empty since the last one that saw it there. Returns the
-// keyframe at which that count reached min_empty_views (0: never), and whether any keyframe
-// could judge the place.
+// keyframe at which that count reached min_empty_views (0: never, or cancelled by a later view
+// that saw it there, for kLatest), and whether any keyframe could judge the place.
 KeyframeId EmptyViewsBetween(const std::map<KeyframeId, ObjectVisibility>& visibility,
                              const std::set<KeyframeId>& observed, KeyframeId from, KeyframeId to,
                              const std::map<KeyframeId, int>& view_of_keyframe,
-                             const ChangeConfig& config, bool* judged) {
+                             const ChangeConfig& config, EmptyEvidence kind, bool* judged) {
   std::set<int> empty_views;
   KeyframeId reached_at = 0;
   for (auto it = visibility.lower_bound(from); it != visibility.end() && it->first < to; ++it) {
@@ -43,6 +56,7 @@ KeyframeId EmptyViewsBetween(const std::map<KeyframeId, ObjectVisibility>& visib
     const ObjectVisibility& seen = it->second;
     if (CouldJudgePlace(seen, config) && judged != nullptr) *judged = true;
     if (SawItThere(seen, config)) {
+      if (kind == EmptyEvidence::kEver && reached_at != 0) return reached_at;
       empty_views.clear();
       reached_at = 0;
       continue;
@@ -81,18 +95,33 @@ float SizeRatio(const MapObject& a, const MapObject& b) {
   return worst;
 }
 
-// The mean colour of the model's voxels (0..255 per channel).
-Eigen::Vector3f MeanColour(const MapObject& object) {
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  std::size_t count = 0;
-  object.model_W.ForEachVoxel([&](const Eigen::Vector3f&, std::uint32_t, auto colour) {
+// The colours of a model: a coarse histogram (4 bins per channel, 64 wide: light and the side
+// seen shift a colour within a bin more often than across), each voxel weighted by the views
+// that reached it, summing to 1.
+using ColourHistogram = std::array<float, 64>;
+ColourHistogram ColoursOf(const MapObject& object) {
+  ColourHistogram histogram{};
+  double total = 0.0;
+  object.model_W.ForEachVoxel([&](const Eigen::Vector3f&, std::uint32_t views, auto colour) {
     const std::array<std::uint8_t, 3> rgb = colour();
-    sum += Eigen::Vector3d(rgb[0], rgb[1], rgb[2]);
-    ++count;
+    histogram[(rgb[0] / 64) * 16 + (rgb[1] / 64) * 4 + rgb[2] / 64] += static_cast<float>(views);
+    total += views;
     return true;
   });
-  if (count == 0) return Eigen::Vector3f::Zero();
-  return (sum / static_cast<double>(count)).cast<float>();
+  if (total > 0.0) {
+    for (float& share : histogram) share = static_cast<float>(share / total);
+  }
+  return histogram;
+}
+
+// The share of colour two models have in common (histogram intersection, 0..1). A model that
+// took in some of its neighbours at its border (a bottle beside a white one, a cup on the floor)
+// still shares its own colours with the same object elsewhere, where the means of all voxels
+// drift apart.
+float ColourOverlap(const ColourHistogram& a, const ColourHistogram& b) {
+  float overlap = 0.f;
+  for (std::size_t i = 0; i < a.size(); ++i) overlap += std::min(a[i], b[i]);
+  return overlap;
 }
 
 ObjectPlace PlaceOf(const PlaceEvidence& evidence) {
@@ -195,28 +224,36 @@ ObjectChanges DetectChanges(const ChangeInputs& inputs, const ChangeConfig& conf
     const std::map<KeyframeId, ObjectVisibility>& visibility = inputs.visibility_of(object);
     evidence.seen_empty_at =
         EmptyViewsBetween(visibility, observed, evidence.last_seen + 1, kMaxKeyframeId,
-                          *inputs.view_of_keyframe, config, nullptr);
+                          *inputs.view_of_keyframe, config, EmptyEvidence::kLatest, nullptr);
     evidence.seen_empty_before =
         EmptyViewsBetween(visibility, observed, 0, evidence.first_seen, *inputs.view_of_keyframe,
-                          config, &evidence.judged_before) != 0;
+                          config, EmptyEvidence::kEver, &evidence.judged_before) != 0;
     if (evidence.seen_empty_at != 0) changes.gone.insert(id);
+    // A removed object counts as what the views up to its removal made of it: those that saw it
+    // there and did not detect it are misses, so a false detection that a view confirmed once,
+    // and many saw there without detecting, is no removal when its place changes.
     evidence.counts = inputs.confirmed_through(
-        object, evidence.seen_empty_at != 0 ? evidence.last_seen : kMaxKeyframeId);
+        object, evidence.seen_empty_at != 0 ? evidence.seen_empty_at : kMaxKeyframeId);
     places.emplace(id, evidence);
   }
 
-  // Moves: each removed object, in the order they went, takes the best later arrival of its
-  // label, shape and colour. Arrivals whose place was seen empty first are surest; then those
-  // whose place nothing saw before (a place the map had not looked at); last those seen standing
-  // there before their first detection (flat things a view cannot see through: a book put on the
-  // floor looks like the floor to the depth; or an object there all along that the detector
-  // missed until then, which only a removed object of its label, shape and colour can claim).
+  // Moves: removed objects and later arrivals of their label, shape and colour are paired, the
+  // surest pairs first. Surest are arrivals that only a move explains: their place was seen
+  // before their first detection and never empty (flat things a view cannot see through, a book
+  // put on the floor looks like the floor to the depth; or an object there all along that the
+  // detector missed until then, which only a removed object of its label, shape and colour can
+  // claim). Then arrivals whose place was seen empty first: surely put there, moved or added;
+  // unpaired, they are reported added. Last those whose place nothing saw before (a place the
+  // map had not looked at, where the object may have stood all along).
   std::map<ObjectId, ObjectId> next, previous;
-  std::map<ObjectId, Eigen::Vector3f> colours;  // mean model colours, worked out when compared
-  auto colour_of = [&colours](const MapObject& object) {
+  std::map<ObjectId, ColourHistogram> colours;  // worked out when first compared
+  auto colours_of = [&colours](const MapObject& object) -> const ColourHistogram& {
     auto it = colours.find(object.id);
-    if (it == colours.end()) it = colours.emplace(object.id, MeanColour(object)).first;
+    if (it == colours.end()) it = colours.emplace(object.id, ColoursOf(object)).first;
     return it->second;
+  };
+  auto colour_overlap = [&](const PlaceEvidence& a, const PlaceEvidence& b) {
+    return ColourOverlap(colours_of(*a.object), colours_of(*b.object));
   };
   std::vector<const PlaceEvidence*> removed;
   for (const auto& [id, evidence] : places) {
@@ -236,53 +273,75 @@ ObjectChanges DetectChanges(const ChangeInputs& inputs, const ChangeConfig& conf
         config.min_move_distance_m) {
       return false;
     }
-    return config.max_move_colour_distance <= 0.f ||
-           (colour_of(*arrival.object) - colour_of(*gone.object)).norm() <=
-               config.max_move_colour_distance;
+    return colour_overlap(gone, arrival) >= config.min_move_colour_overlap;
   };
   auto surety_of = [](const PlaceEvidence& arrival) {
-    return arrival.seen_empty_before ? 0 : arrival.judged_before ? 2 : 1;
+    return !arrival.seen_empty_before && arrival.judged_before ? 0
+           : arrival.seen_empty_before                         ? 1
+                                                               : 2;
   };
-  auto colour_gap = [&](const PlaceEvidence& a, const PlaceEvidence& b) {
-    return (colour_of(*a.object) - colour_of(*b.object)).norm();
+  // How unlike the two are, each key scaled by its limit: 0 for one shape and one colour, 1 at
+  // the limit of either.
+  auto unlikeness = [&](const PlaceEvidence& gone, const PlaceEvidence& arrival) {
+    float cost = std::log(SizeRatio(*gone.object, *arrival.object)) /
+                 std::log(std::max(config.max_move_size_ratio, 1.01f));
+    if (config.min_move_colour_overlap > 0.f) cost += 1.f - colour_overlap(gone, arrival);
+    return cost;
   };
+  struct MoveCandidate {
+    const PlaceEvidence* gone = nullptr;
+    const PlaceEvidence* arrival = nullptr;
+    int surety = 0;
+    float unlikeness = 0.f;
+  };
+  std::vector<MoveCandidate> candidates;
   for (const PlaceEvidence* gone : removed) {
-    const PlaceEvidence* best = nullptr;
-    std::tuple<int, float, KeyframeId> best_key;
     for (const auto& [id, arrival] : places) {
-      if (previous.count(id) > 0 || !could_be_move(*gone, arrival)) continue;
-      const std::tuple<int, float, KeyframeId> key{
-          surety_of(arrival), SizeRatio(*gone->object, *arrival.object), arrival.first_seen};
-      if (best == nullptr || key < best_key) {
-        best = &arrival;
-        best_key = key;
-      }
+      if (!could_be_move(*gone, arrival)) continue;
+      candidates.push_back({gone, &arrival, surety_of(arrival), unlikeness(*gone, arrival)});
     }
-    if (best == nullptr) continue;
-    if (config.move_ambiguity_colour_margin > 0.f) {
+  }
+  // The surest, most alike pairs first, over all removals and arrivals at once: a removal that
+  // went first does not take the arrival that fits a later one better.
+  std::sort(
+      candidates.begin(), candidates.end(), [](const MoveCandidate& a, const MoveCandidate& b) {
+        return std::make_tuple(a.surety, a.unlikeness, a.gone->seen_empty_at, a.arrival->first_seen,
+                               a.gone->object->id, a.arrival->object->id) <
+               std::make_tuple(b.surety, b.unlikeness, b.gone->seen_empty_at, b.arrival->first_seen,
+                               b.gone->object->id, b.arrival->object->id);
+      });
+  std::set<ObjectId> undecided_gone, undecided_arrivals;
+  for (const MoveCandidate& candidate : candidates) {
+    const ObjectId gone_id = candidate.gone->object->id;
+    const ObjectId arrival_id = candidate.arrival->object->id;
+    if (next.count(gone_id) > 0 || previous.count(arrival_id) > 0 ||
+        undecided_gone.count(gone_id) > 0 || undecided_arrivals.count(arrival_id) > 0) {
+      continue;
+    }
+    if (config.move_ambiguity_overlap_margin > 0.f) {
       // Look-alikes (two mugs of one make): another arrival as sure that fits this removal as
       // well, or another removal that fits this arrival as well, leaves the move undecided. Two
       // changes reported as they were seen (removed, added) are wrong less often than a guess.
-      const float best_gap = colour_gap(*gone, *best);
-      const float margin = config.move_ambiguity_colour_margin;
-      bool ambiguous = false;
-      for (const auto& [id, arrival] : places) {
-        if (&arrival == best || previous.count(id) > 0 || !could_be_move(*gone, arrival)) continue;
-        if (surety_of(arrival) == std::get<0>(best_key) &&
-            colour_gap(*gone, arrival) <= best_gap + margin) {
-          ambiguous = true;
-        }
+      const float limit = colour_overlap(*candidate.gone, *candidate.arrival) -
+                          config.move_ambiguity_overlap_margin;
+      const bool ambiguous =
+          std::any_of(candidates.begin(), candidates.end(), [&](const MoveCandidate& other) {
+            if (&other == &candidate || other.surety != candidate.surety) return false;
+            const bool rival_arrival =
+                other.gone == candidate.gone && previous.count(other.arrival->object->id) == 0;
+            const bool rival_gone =
+                other.arrival == candidate.arrival && next.count(other.gone->object->id) == 0;
+            return (rival_arrival || rival_gone) &&
+                   colour_overlap(*other.gone, *other.arrival) >= limit;
+          });
+      if (ambiguous) {
+        undecided_gone.insert(gone_id);
+        undecided_arrivals.insert(arrival_id);
+        continue;
       }
-      for (const PlaceEvidence* other : removed) {
-        if (other == gone || next.count(other->object->id) > 0) continue;
-        if (could_be_move(*other, *best) && colour_gap(*other, *best) <= best_gap + margin) {
-          ambiguous = true;
-        }
-      }
-      if (ambiguous) continue;
     }
-    next[gone->object->id] = best->object->id;
-    previous[best->object->id] = gone->object->id;
+    next[gone_id] = arrival_id;
+    previous[arrival_id] = gone_id;
   }
 
   for (const auto& [id, head] : places) {

@@ -99,7 +99,7 @@ struct ChangeInputs {
   /// What each keyframe saw of an object (keyframes that saw none of it: absent).
   std::function<const std::map<KeyframeId, ObjectVisibility>&(const MapObject&)> visibility_of;
   /// Whether the object passed the inventory thresholds with the keyframes up to `through`
-  /// (a removed object counts as what it was before it went).
+  /// (a removed object counts as what the views up to its removal made of it).
   std::function<bool(const MapObject&, KeyframeId through)> confirmed_through;
 };
 

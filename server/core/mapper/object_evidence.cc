@@ -51,11 +51,15 @@ bool ChangeConfig::IsValid(std::string* why) const {
     *why = "ChangeConfig: min_projected_area_px must be >= 0 and min_empty_views >= 1";
     return false;
   }
-  if (!(max_move_size_ratio >= 1.f) || !(min_move_distance_m >= 0.f) ||
-      !(max_move_colour_distance >= 0.f)) {
+  if (!(max_move_size_ratio >= 1.f) || !(min_move_distance_m >= 0.f)) {
+    *why = "ChangeConfig: max_move_size_ratio must be >= 1 and min_move_distance_m >= 0";
+    return false;
+  }
+  if (!(min_move_colour_overlap >= 0.f && min_move_colour_overlap <= 1.f) ||
+      !(move_ambiguity_overlap_margin >= 0.f && move_ambiguity_overlap_margin <= 1.f)) {
     *why =
-        "ChangeConfig: max_move_size_ratio must be >= 1, min_move_distance_m and "
-        "max_move_colour_distance >= 0";
+        "ChangeConfig: min_move_colour_overlap and move_ambiguity_overlap_margin must be in "
+        "[0, 1]";
     return false;
   }
   return true;
@@ -205,7 +209,11 @@ ObjectEvidence EvidenceOf(const MapObject& object,
   for (const auto& [keyframe, seen] : visibility) {
     if (detected.count(keyframe) > 0 || !(seen.visible_fraction > 0.f)) continue;
     const float detectability = std::min(1.f, seen.projected_area_px / config.detectable_area_px);
-    add(keyframe, -config.miss_weight * seen.visible_fraction * detectability, false);
+    // Only what the view measured on the object's surface could have been detected: where its
+    // depth lies behind the model the view looked through the place (the object was not there
+    // yet, or no longer), which is no miss of the detector's.
+    const float there = seen.visible_fraction * (1.f - seen.empty_fraction);
+    if (there > 0.f) add(keyframe, -config.miss_weight * there * detectability, false);
     if (seen.visible_fraction * detectability >= config.absent_min_visibility) {
       evidence.last_absent = std::max(evidence.last_absent, keyframe);
     }

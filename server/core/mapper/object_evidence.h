@@ -106,16 +106,15 @@ struct ChangeConfig {
   /// association would have kept them one object).
   float max_move_size_ratio = 2.0f;
   float min_move_distance_m = 0.2f;
-  /// ... and their models' mean colours (RGB, 0..255 per channel) lie at most this far apart
-  /// (Euclidean): a red mug taken away and a white one put down elsewhere are two changes, not
-  /// one move. Lenient: light and the side seen change the mean. 0: colour is not compared.
-  float max_move_colour_distance = 70.f;
+  /// ... and their models share at least this much of their colours (the intersection of
+  /// coarse colour histograms, 0..1): a red mug taken away and a white one put down elsewhere are
+  /// two changes, not one move. 0: colour is not compared.
+  float min_move_colour_overlap = 0.3f;
   /// A move is undecided, and the removal and the arrival are reported as such, when another
-  /// arrival (or another removed object) of the label fits within this much more colour distance
-  /// than the best one: look-alikes, which a guess may pair wrongly. 0: the best fit is always
-  /// taken. Off by default: on the synthetic revisits (docs/evaluation.md) 15 lowered the pooled
-  /// change precision from 0.661 to 0.631 at the same recall (split moves are two errors each).
-  float move_ambiguity_colour_margin = 0.f;
+  /// arrival (or another removed object) of the label, as sure, shares within this much as many
+  /// colours: look-alikes, which a guess may pair wrongly. 0: the best fit is always taken. Off by
+  /// default: split moves are two errors each (docs/evaluation.md).
+  float move_ambiguity_overlap_margin = 0.f;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
