@@ -305,5 +305,123 @@ TEST_F(ObjectChangesTest, ChangesCanBeSwitchedOff) {
   EXPECT_NE(why.find("min_empty_views"), std::string::npos) << why;
 }
 
+// DetectChanges on its own, with what each keyframe saw of a keyboard given: the first keyframes
+// detected it there, the later ones (independent views) saw through 40 % of it. Its model took
+// in a rim of the desk, which stays when the keyboard goes: less than min_empty_fraction (0.5),
+// but far above the 3 % its own views saw through.
+class DetectChangesOfAKeyboard : public ::testing::Test {
+ protected:
+  // Keyframes 1..`observing` detect the keyboard, the rest up to 5 see through 40 % of it.
+  std::vector<ObjectChange> Changes(KeyframeId observing, const ChangeConfig& config) {
+    const int keyboard = CocoClassId("keyboard");
+    ObjectMap objects;
+    std::map<KeyframeId, int> view_of_keyframe;
+    std::map<KeyframeId, ObjectVisibility> seen;
+    for (KeyframeId keyframe = 1; keyframe <= 5; ++keyframe) {
+      view_of_keyframe[keyframe] = static_cast<int>(keyframe);
+      seen[keyframe] = {1.f, 5000.f, keyframe <= observing ? 0.03f : 0.4f};
+      if (keyframe > observing) continue;
+      ObjectObservation observation;
+      observation.keyframe_id = keyframe;
+      observation.class_scores = {{keyboard, 0.7f}};
+      for (int i = 0; i < 40; ++i) {
+        observation.segment_C.points.emplace_back(0.01f * static_cast<float>(i), 0.f, 1.f);
+        observation.segment_C.colors.push_back({40, 40, 40});
+      }
+      observation.view = static_cast<std::int64_t>(keyframe);
+      if (keyframe == 1) {
+        id_ = objects.AddObject(observation, Eigen::Isometry3d::Identity());
+      } else {
+        EXPECT_TRUE(objects.AddObservation(id_, observation, Eigen::Isometry3d::Identity()));
+      }
+    }
+    ChangeInputs inputs;
+    inputs.objects = &objects;
+    inputs.view_of_keyframe = &view_of_keyframe;
+    inputs.visibility_of =
+        [&seen](const MapObject&) -> const std::map<KeyframeId, ObjectVisibility>& { return seen; };
+    inputs.confirmed_through = [](const MapObject&, KeyframeId) { return true; };
+    return ChangeList(DetectChanges(inputs, config));
+  }
+
+  ObjectId id_ = 0;
+};
+
+TEST_F(DetectChangesOfAKeyboard, IsRemovedWhenSeenThroughWellAboveWhatItsOwnViewsSaw) {
+  const std::vector<ObjectChange> changes = Changes(3, ChangeConfig{});
+  ASSERT_EQ(changes.size(), 1u);
+  EXPECT_EQ(changes[0].kind, ObjectChange::Kind::kRemoved);
+  EXPECT_EQ(changes[0].id, id_);
+  EXPECT_EQ(changes[0].keyframe_id, 5);  // the second view that saw through it
+
+  ChangeConfig absolute_only;
+  absolute_only.min_empty_fraction_over_present = 0.f;
+  EXPECT_TRUE(Changes(3, absolute_only).empty());
+}
+
+TEST_F(DetectChangesOfAKeyboard, StaysWithTooFewViewsOfItThereToCompareWith) {
+  // Two views saw it there: no baseline, min_empty_fraction decides, and 40 % is not empty.
+  EXPECT_TRUE(Changes(2, ChangeConfig{}).empty());
+}
+
+// Two mugs of one make arrive while one goes: one where earlier views saw nothing but the
+// floor (a place they could judge and never saw empty: flat, or there all along), one where
+// earlier views saw the table empty. Only a move explains the first; the second is put there
+// either way, and is reported added.
+TEST(DetectChangesPairing, TheArrivalOnlyAMoveExplainsIsTheMove) {
+  const int cup = CocoClassId("cup");
+  ObjectMap objects;
+  std::map<KeyframeId, int> view_of_keyframe;
+  for (KeyframeId keyframe = 1; keyframe <= 6; ++keyframe) {
+    view_of_keyframe[keyframe] = static_cast<int>(keyframe);
+  }
+  // Mugs of 40 points along x from `x0`, seen in keyframes [from, to].
+  auto mug = [&](float x0, KeyframeId from, KeyframeId to) {
+    ObjectId id = 0;
+    for (KeyframeId keyframe = from; keyframe <= to; ++keyframe) {
+      ObjectObservation observation;
+      observation.keyframe_id = keyframe;
+      observation.class_scores = {{cup, 0.8f}};
+      for (int i = 0; i < 40; ++i) {
+        observation.segment_C.points.emplace_back(x0 + 0.002f * static_cast<float>(i), 0.f, 1.f);
+        observation.segment_C.colors.push_back({200, 200, 210});
+      }
+      observation.view = static_cast<std::int64_t>(keyframe);
+      if (id == 0) {
+        id = objects.AddObject(observation, Eigen::Isometry3d::Identity());
+      } else {
+        EXPECT_TRUE(objects.AddObservation(id, observation, Eigen::Isometry3d::Identity()));
+      }
+    }
+    return id;
+  };
+  const ObjectId gone = mug(0.f, 1, 3);
+  const ObjectId on_the_floor = mug(1.f, 4, 6);
+  const ObjectId on_the_table = mug(2.f, 4, 6);
+  // What each keyframe saw of each place: empty fraction per keyframe.
+  std::map<ObjectId, std::map<KeyframeId, ObjectVisibility>> seen;
+  for (KeyframeId keyframe = 1; keyframe <= 6; ++keyframe) {
+    const bool first_visit = keyframe <= 3;
+    seen[gone][keyframe] = {1.f, 5000.f, first_visit ? 0.f : 0.9f};
+    seen[on_the_floor][keyframe] = {1.f, 5000.f, 0.f};
+    seen[on_the_table][keyframe] = {1.f, 5000.f, first_visit ? 0.9f : 0.f};
+  }
+  ChangeInputs inputs;
+  inputs.objects = &objects;
+  inputs.view_of_keyframe = &view_of_keyframe;
+  inputs.visibility_of =
+      [&seen](const MapObject& object) -> const std::map<KeyframeId, ObjectVisibility>& {
+    return seen.at(object.id);
+  };
+  inputs.confirmed_through = [](const MapObject&, KeyframeId) { return true; };
+  const ObjectChanges changes = DetectChanges(inputs, ChangeConfig{});
+  EXPECT_EQ(changes.PublishedId(on_the_floor), gone);
+  ASSERT_EQ(changes.histories.count(gone), 1u);
+  EXPECT_EQ(changes.histories.at(gone).state, ObjectState::kMoved);
+  ASSERT_EQ(changes.histories.count(on_the_table), 1u);
+  EXPECT_EQ(changes.histories.at(on_the_table).added_at, 4);
+  EXPECT_EQ(changes.histories.at(on_the_table).state, ObjectState::kPresent);
+}
+
 }  // namespace
 }  // namespace objmap

@@ -103,6 +103,7 @@ void VisitMapModel(MapperConfig* m, Visitor& v) {
   v("min_visible_fraction", &c.min_visible_fraction);
   v("min_projected_area_px", &c.min_projected_area_px);
   v("min_empty_fraction", &c.min_empty_fraction);
+  v("min_empty_fraction_over_present", &c.min_empty_fraction_over_present);
   v("min_empty_views", &c.min_empty_views);
   v("max_move_size_ratio", &c.max_move_size_ratio);
   v("min_move_distance_m", &c.min_move_distance_m);

@@ -25,8 +25,38 @@ struct PlaceEvidence {
 
 // A view clearly saw the object there: its place in view, and at most half the share of
 // see-through points that would call it empty.
-bool SawItThere(const ObjectVisibility& seen, const ChangeConfig& config) {
-  return CouldJudgePlace(seen, config) && seen.empty_fraction < 0.5f * config.min_empty_fraction;
+bool SawItThere(const ObjectVisibility& seen, float empty_fraction, const ChangeConfig& config) {
+  return CouldJudgePlace(seen, config) && seen.empty_fraction < 0.5f * empty_fraction;
+}
+
+// A view saw the object's place empty: it judged the place and saw through at least
+// `empty_fraction` of the object's points in view.
+bool SawPlaceEmpty(const ObjectVisibility& seen, float empty_fraction, const ChangeConfig& config) {
+  return CouldJudgePlace(seen, config) && seen.empty_fraction >= empty_fraction;
+}
+
+// The share of its points in view that a view must see through to see this object's place
+// empty: ChangeConfig::min_empty_fraction, or less for an object that the views which detected
+// it there saw solid. A keyboard or a mug whose model took in a rim of the desk around it keeps
+// that rim in view when it is taken away, and a view sees through only 40 % of it; while it was
+// there, views saw through 2-6 %. What its own views measured is the object's baseline; clearly
+// above it (min_empty_fraction_over_present, over the 90th percentile) is empty.
+float EmptyFractionOf(const std::map<KeyframeId, ObjectVisibility>& visibility,
+                      const std::set<KeyframeId>& observed, const ChangeConfig& config) {
+  // Fewer views that detected it and judged its place: no baseline to speak of.
+  constexpr std::size_t kMinPresentViews = 3;
+  if (!(config.min_empty_fraction_over_present > 0.f)) return config.min_empty_fraction;
+  std::vector<float> present;
+  for (const KeyframeId keyframe : observed) {
+    const auto it = visibility.find(keyframe);
+    if (it != visibility.end() && CouldJudgePlace(it->second, config)) {
+      present.push_back(it->second.empty_fraction);
+    }
+  }
+  if (present.size() < kMinPresentViews) return config.min_empty_fraction;
+  const auto p90 = present.begin() + static_cast<std::ptrdiff_t>(present.size() * 9 / 10);
+  std::nth_element(present.begin(), p90, present.end());
+  return std::min(config.min_empty_fraction, *p90 + config.min_empty_fraction_over_present);
 }
 
 // What a run of views that saw a place empty says, once min_empty_views of them agree.
@@ -48,20 +78,21 @@ enum class EmptyEvidence {
 KeyframeId EmptyViewsBetween(const std::map<KeyframeId, ObjectVisibility>& visibility,
                              const std::set<KeyframeId>& observed, KeyframeId from, KeyframeId to,
                              const std::map<KeyframeId, int>& view_of_keyframe,
-                             const ChangeConfig& config, EmptyEvidence kind, bool* judged) {
+                             float empty_fraction, const ChangeConfig& config, EmptyEvidence kind,
+                             bool* judged) {
   std::set<int> empty_views;
   KeyframeId reached_at = 0;
   for (auto it = visibility.lower_bound(from); it != visibility.end() && it->first < to; ++it) {
     if (observed.count(it->first) > 0) continue;
     const ObjectVisibility& seen = it->second;
     if (CouldJudgePlace(seen, config) && judged != nullptr) *judged = true;
-    if (SawItThere(seen, config)) {
+    if (SawItThere(seen, empty_fraction, config)) {
       if (kind == EmptyEvidence::kEver && reached_at != 0) return reached_at;
       empty_views.clear();
       reached_at = 0;
       continue;
     }
-    if (!SawPlaceEmpty(seen, config)) continue;
+    if (!SawPlaceEmpty(seen, empty_fraction, config)) continue;
     const auto view = view_of_keyframe.find(it->first);
     empty_views.insert(view != view_of_keyframe.end() ? view->second
                                                       : -static_cast<int>(it->first));
@@ -84,8 +115,7 @@ std::array<float, 3> SortedExtents(const MapObject& object) {
 // centimetres of either extent are within the noise of a model seen from a few sides. The
 // smallest extent is left out: it is the depth a view sees least of (a chair seen from the front
 // is a thin slab until a view from the side fills it in).
-float SizeRatio(const MapObject& a, const MapObject& b) {
-  const std::array<float, 3> ea = SortedExtents(a), eb = SortedExtents(b);
+float SizeRatio(const std::array<float, 3>& ea, const std::array<float, 3>& eb) {
   float worst = 1.f;
   for (int i = 0; i < 2; ++i) {
     const float small = std::max(std::min(ea[i], eb[i]), 0.03f);
@@ -97,19 +127,38 @@ float SizeRatio(const MapObject& a, const MapObject& b) {
 
 // The colours of a model: a coarse histogram (4 bins per channel, 64 wide: light and the side
 // seen shift a colour within a bin more often than across), each voxel weighted by the views
-// that reached it, summing to 1.
+// that reached it, summing to 1. A colour is shared between the two nearest bins of each channel
+// in proportion to its distance from their centres, so that 63 and 65 (a dark grey laptop seen
+// in two lights) fall into the same bins, not into neighbours that share nothing.
 using ColourHistogram = std::array<float, 64>;
 ColourHistogram ColoursOf(const MapObject& object) {
+  constexpr int kBins = 4;
+  constexpr float kBinWidth = 256.f / kBins;
   ColourHistogram histogram{};
   double total = 0.0;
   object.model_W.ForEachVoxel([&](const Eigen::Vector3f&, std::uint32_t views, auto colour) {
     const std::array<std::uint8_t, 3> rgb = colour();
-    histogram[(rgb[0] / 64) * 16 + (rgb[1] / 64) * 4 + rgb[2] / 64] += static_cast<float>(views);
+    std::array<std::array<int, 2>, 3> bin{};
+    std::array<std::array<float, 2>, 3> share{};
+    for (int c = 0; c < 3; ++c) {
+      const float position = std::clamp(rgb[c] / kBinWidth - 0.5f, 0.f, kBins - 1.f);
+      const int low = std::min(static_cast<int>(position), kBins - 2);
+      bin[c] = {low, low + 1};
+      share[c] = {1.f - (position - low), position - low};
+    }
+    for (int r = 0; r < 2; ++r) {
+      for (int g = 0; g < 2; ++g) {
+        for (int b = 0; b < 2; ++b) {
+          histogram[(bin[0][r] * kBins + bin[1][g]) * kBins + bin[2][b]] +=
+              static_cast<float>(views) * share[0][r] * share[1][g] * share[2][b];
+        }
+      }
+    }
     total += views;
     return true;
   });
   if (total > 0.0) {
-    for (float& share : histogram) share = static_cast<float>(share / total);
+    for (float& weight : histogram) weight = static_cast<float>(weight / total);
   }
   return histogram;
 }
@@ -222,12 +271,14 @@ ObjectChanges DetectChanges(const ChangeInputs& inputs, const ChangeConfig& conf
     evidence.first_seen = *observed.begin();
     evidence.last_seen = *observed.rbegin();
     const std::map<KeyframeId, ObjectVisibility>& visibility = inputs.visibility_of(object);
-    evidence.seen_empty_at =
-        EmptyViewsBetween(visibility, observed, evidence.last_seen + 1, kMaxKeyframeId,
-                          *inputs.view_of_keyframe, config, EmptyEvidence::kLatest, nullptr);
+    const float empty_fraction = EmptyFractionOf(visibility, observed, config);
+    evidence.seen_empty_at = EmptyViewsBetween(
+        visibility, observed, evidence.last_seen + 1, kMaxKeyframeId, *inputs.view_of_keyframe,
+        empty_fraction, config, EmptyEvidence::kLatest, nullptr);
     evidence.seen_empty_before =
         EmptyViewsBetween(visibility, observed, 0, evidence.first_seen, *inputs.view_of_keyframe,
-                          config, EmptyEvidence::kEver, &evidence.judged_before) != 0;
+                          empty_fraction, config, EmptyEvidence::kEver,
+                          &evidence.judged_before) != 0;
     if (evidence.seen_empty_at != 0) changes.gone.insert(id);
     // A removed object counts as what the views up to its removal made of it: those that saw it
     // there and did not detect it are misses, so a false detection that a view confirmed once,
@@ -255,6 +306,15 @@ ObjectChanges DetectChanges(const ChangeInputs& inputs, const ChangeConfig& conf
   auto colour_overlap = [&](const PlaceEvidence& a, const PlaceEvidence& b) {
     return ColourOverlap(colours_of(*a.object), colours_of(*b.object));
   };
+  std::map<ObjectId, std::array<float, 3>> extents;  // worked out when first compared
+  auto extents_of = [&extents](const MapObject& object) -> const std::array<float, 3>& {
+    auto it = extents.find(object.id);
+    if (it == extents.end()) it = extents.emplace(object.id, SortedExtents(object)).first;
+    return it->second;
+  };
+  auto size_ratio = [&](const PlaceEvidence& a, const PlaceEvidence& b) {
+    return SizeRatio(extents_of(*a.object), extents_of(*b.object));
+  };
   std::vector<const PlaceEvidence*> removed;
   for (const auto& [id, evidence] : places) {
     if (evidence.counts && evidence.seen_empty_at != 0) removed.push_back(&evidence);
@@ -268,7 +328,7 @@ ObjectChanges DetectChanges(const ChangeInputs& inputs, const ChangeConfig& conf
     if (arrival.first_seen <= gone.last_seen || arrival.object->Label() != gone.object->Label()) {
       return false;
     }
-    if (SizeRatio(*gone.object, *arrival.object) > config.max_move_size_ratio) return false;
+    if (size_ratio(gone, arrival) > config.max_move_size_ratio) return false;
     if ((arrival.object->centroid_W - gone.object->centroid_W).norm() <
         config.min_move_distance_m) {
       return false;
@@ -283,8 +343,8 @@ ObjectChanges DetectChanges(const ChangeInputs& inputs, const ChangeConfig& conf
   // How unlike the two are, each key scaled by its limit: 0 for one shape and one colour, 1 at
   // the limit of either.
   auto unlikeness = [&](const PlaceEvidence& gone, const PlaceEvidence& arrival) {
-    float cost = std::log(SizeRatio(*gone.object, *arrival.object)) /
-                 std::log(std::max(config.max_move_size_ratio, 1.01f));
+    float cost =
+        std::log(size_ratio(gone, arrival)) / std::log(std::max(config.max_move_size_ratio, 1.01f));
     if (config.min_move_colour_overlap > 0.f) cost += 1.f - colour_overlap(gone, arrival);
     return cost;
   };

@@ -43,8 +43,11 @@ bool ChangeConfig::IsValid(std::string* why) const {
     return false;
   }
   if (!(min_visible_fraction > 0.f && min_visible_fraction <= 1.f) ||
-      !(min_empty_fraction > 0.f && min_empty_fraction <= 1.f)) {
-    *why = "ChangeConfig: min_visible_fraction and min_empty_fraction must be in (0, 1]";
+      !(min_empty_fraction > 0.f && min_empty_fraction <= 1.f) ||
+      !(min_empty_fraction_over_present >= 0.f && min_empty_fraction_over_present <= 1.f)) {
+    *why =
+        "ChangeConfig: min_visible_fraction and min_empty_fraction must be in (0, 1], "
+        "min_empty_fraction_over_present in [0, 1]";
     return false;
   }
   if (!(min_projected_area_px >= 0.f) || min_empty_views < 1) {
@@ -89,15 +92,32 @@ bool ViewGroupingConfig::SameView(const Eigen::Isometry3d& anchor_W_C,
          Eigen::AngleAxisd(delta.linear()).angle() <= rotation_deg * M_PI / 180.0;
 }
 
+std::uint32_t SurfaceMinViews(const MapObject& object) {
+  // Fewer confirmed voxels than this: a model of one or two views, taken whole.
+  constexpr std::size_t kMinConfirmedVoxels = 32;
+  constexpr std::uint32_t kConfirmingViews = 2;
+  std::size_t confirmed = 0;
+  object.model_W.ForEachVoxel([&](const Eigen::Vector3f&, std::uint32_t views, auto) {
+    if (views >= kConfirmingViews) ++confirmed;
+    return confirmed < kMinConfirmedVoxels;
+  });
+  return confirmed >= kMinConfirmedVoxels ? kConfirmingViews : 0;
+}
+
 std::vector<Eigen::Vector3f> VisibilitySamples(const MapObject& object, int max_points) {
-  const std::size_t size = object.model_W.size();
+  const std::uint32_t min_views = SurfaceMinViews(object);
+  std::size_t size = 0;
+  object.model_W.ForEachVoxel([&](const Eigen::Vector3f&, std::uint32_t views, auto) {
+    if (views >= min_views) ++size;
+    return true;
+  });
   const std::size_t step = std::max<std::size_t>(
       1, (size + static_cast<std::size_t>(max_points) - 1) / static_cast<std::size_t>(max_points));
   std::vector<Eigen::Vector3f> samples;
   samples.reserve(std::min(size, static_cast<std::size_t>(max_points)));
   std::size_t index = 0;
-  object.model_W.ForEachPoint([&](const Eigen::Vector3f& p) {
-    if (index++ % step == 0) samples.push_back(p);
+  object.model_W.ForEachVoxel([&](const Eigen::Vector3f& p, std::uint32_t views, auto) {
+    if (views >= min_views && index++ % step == 0) samples.push_back(p);
     return true;
   });
   return samples;

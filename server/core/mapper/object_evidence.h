@@ -95,8 +95,13 @@ struct ChangeConfig {
   /// ... covering at least this many pixels (the box around them): fewer are too few to tell
   /// an empty place from depth noise at an object's border.
   float min_projected_area_px = 400.f;
-  /// A view saw the place empty when at least this share of its visible points was seen through.
+  /// A view saw the place empty when at least this share of its visible points was seen through
+  /// ...
   float min_empty_fraction = 0.5f;
+  /// ... or this much more than the views that detected the object there saw through (their
+  /// 90th percentile; with three such views or more), when that is less: a model that took in a
+  /// rim of its support keeps the rim in view when the object goes. 0: min_empty_fraction alone.
+  float min_empty_fraction_over_present = 0.25f;
   /// Independent views (ViewGroupingConfig) that must have seen a place empty: after an
   /// object's last sighting to call it removed, before its first sighting to call it added.
   int min_empty_views = 2;
@@ -131,7 +136,14 @@ struct ObjectVisibility {
   float empty_fraction = 0.f;
 };
 
-/// Evenly spaced points of the object's model, at most `max_points`.
+/// The fewest views that must have reached a voxel of the object's model for it to count as the
+/// object's surface: 2 when the model has enough such voxels (a voxel one view put there and no
+/// other confirmed is a stray more often than surface: a border pixel of the table, a bit of a
+/// neighbour, which would stay in view when the object is taken away), else 0 (a model of one
+/// or two views, taken whole).
+[[nodiscard]] std::uint32_t SurfaceMinViews(const MapObject& object);
+
+/// Evenly spaced points of the object's surface (SurfaceMinViews), at most `max_points`.
 [[nodiscard]] std::vector<Eigen::Vector3f> VisibilitySamples(const MapObject& object,
                                                              int max_points);
 
