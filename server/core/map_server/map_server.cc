@@ -361,6 +361,7 @@ MapJob::Result MapServer::Impl::ApplyKeyframe(MapJob* job) {
   MapJob::Result out;
   KeyframeResult result;
   std::string why;
+  mapper->SetSession(job->session.id);
   if (!mapper->AddKeyframe(job->frame, job->detections, &result, &why)) {
     out.status = ServiceStatus::Invalid(why);
     return out;

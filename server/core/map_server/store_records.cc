@@ -29,6 +29,7 @@ RestoreOutcome RestoreMapper(StoredMap stored, std::optional<StoredCheckpoint> c
     record.intrinsics = keyframe.intrinsics;
     record.depth_mm = std::move(keyframe.depth_mm);
     record.object_mask = std::move(keyframe.object_mask);
+    record.session = keyframe.session_id;
     known_keyframes->insert(keyframe.id);
   }
   std::map<ObjectId, std::vector<ObjectObservation>> observations;

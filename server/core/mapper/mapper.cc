@@ -297,6 +297,9 @@ struct Mapper::Impl {
   // and recomputed when poses change; the first keyframe of the latest view is its anchor.
   std::map<KeyframeId, int> view_of_keyframe;
   KeyframeId view_anchor = 0;
+  // The mapping session of every keyframe (KeyframeRecord::session), and that of keyframes to come.
+  std::map<KeyframeId, std::int64_t> session_of_keyframe;
+  std::int64_t session = 0;
   int ViewOfNewKeyframe(KeyframeId id, const Eigen::Isometry3d& T_W_C);
   // Regroups every keyframe with its current pose (the objects' observations are not touched).
   void RecomputeViews();
@@ -557,6 +560,7 @@ bool Mapper::AddKeyframe(const RgbdFrame& frame, const std::vector<Detection>& d
   result->detections_used = static_cast<int>(segmented.size());
   // Unclassified segments stay structure in the OctoMap: the record's mask has the named only.
   KeyframeRecord record = MakeRecord(frame, segmented);
+  record.session = impl_->session;
   std::vector<SegmentedDetection> unclassified =
       UnclassifiedSegments(frame, cloud_C, segmentation, index, detections, segmented,
                            result->keyframe_id, impl_->config);
@@ -577,10 +581,13 @@ bool Mapper::AddKeyframe(const RgbdFrame& frame, const std::vector<Detection>& d
 
   start = Clock::now();
   impl_->occupancy.Integrate(DepthScanOf(record));
+  impl_->session_of_keyframe[result->keyframe_id] = record.session;
   impl_->keyframes.emplace(result->keyframe_id, std::move(record));
   result->timings.occupancy_ms = MillisecondsSince(start);
   return true;
 }
+
+void Mapper::SetSession(std::int64_t session) { impl_->session = session; }
 
 bool Mapper::UpdatePoses(const std::map<KeyframeId, Eigen::Isometry3d>& poses, std::string* why,
                          PoseUpdateReport* report) {
@@ -639,6 +646,8 @@ RestoreOutcome Mapper::Restore(std::map<KeyframeId, KeyframeRecord> keyframes,
                                std::map<ObjectId, std::vector<ObjectObservation>> observations,
                                ObjectId next_object_id, const OccupancyCheckpoint* checkpoint) {
   impl_->keyframes = std::move(keyframes);
+  impl_->session_of_keyframe.clear();
+  for (const auto& [id, record] : impl_->keyframes) impl_->session_of_keyframe[id] = record.session;
   impl_->reach_C.clear();
   impl_->visibility_cache.clear();
   impl_->next_keyframe_id = impl_->keyframes.empty() ? 1 : impl_->keyframes.rbegin()->first + 1;
@@ -676,7 +685,7 @@ void Mapper::ReadOccupancy(const std::function<void(const OccupancyMap&)>& read)
 
 ObjectEvidence Mapper::Evidence(const MapObject& object) const {
   return EvidenceOf(object, impl_->VisibilityOf(object), impl_->view_of_keyframe,
-                    impl_->config.inventory);
+                    impl_->session_of_keyframe, impl_->config.inventory);
 }
 
 bool Mapper::Impl::IsConfirmedThrough(const MapObject& object, KeyframeId through) const {
@@ -692,7 +701,7 @@ bool Mapper::Impl::IsConfirmedThrough(const MapObject& object, KeyframeId throug
   const bool whole = all.empty() || all.rbegin()->first <= through;
   if (!whole) until.insert(all.begin(), all.upper_bound(through));
   const ObjectEvidence evidence =
-      EvidenceOf(object, whole ? all : until, view_of_keyframe, thresholds);
+      EvidenceOf(object, whole ? all : until, view_of_keyframe, session_of_keyframe, thresholds);
   if (unknown && evidence.views_detecting < thresholds.unknown_min_views) return false;
   return evidence.evidence >= thresholds.min_evidence;
 }
@@ -709,6 +718,7 @@ ObjectChanges Mapper::Changes() const {
   ChangeInputs inputs;
   inputs.objects = &impl_->objects;
   inputs.view_of_keyframe = &impl_->view_of_keyframe;
+  inputs.session_of_keyframe = &impl_->session_of_keyframe;
   inputs.visibility_of =
       [this](const MapObject& object) -> const std::map<KeyframeId, ObjectVisibility>& {
     return impl_->VisibilityOf(object);

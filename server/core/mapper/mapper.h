@@ -209,6 +209,9 @@ struct KeyframeRecord {
   CameraIntrinsics intrinsics;
   std::vector<std::uint16_t> depth_mm;    ///< row-major, 0: no depth
   std::vector<std::uint8_t> object_mask;  ///< row-major, 1: the pixel belongs to an object
+  /// The mapping session it was taken in (Mapper::SetSession): views of one session saw one
+  /// world; between sessions objects may have been put down or taken away.
+  std::int64_t session = 0;
 };
 
 /// Depth in millimetres as a keyframe keeps it: 0 where there is none (or beyond 65 m).
@@ -248,6 +251,11 @@ class Mapper {
   /// then unchanged.
   [[nodiscard]] bool AddKeyframe(const RgbdFrame& frame, const std::vector<Detection>& detections,
                                  KeyframeResult* result, std::string* why);
+
+  /// Keyframes added from now on belong to this mapping session (0 until set). Within a session
+  /// a view that looked through the place of an object detected in that session is a miss of
+  /// it; a view of another session that did is none (ObjectEvidence).
+  void SetSession(std::int64_t session);
 
   /// Replaces keyframe poses (a pose-graph update) and regenerates the object models and the
   /// occupancy map from the stored keyframe clouds. Unknown ids or bad poses: false, map unchanged.

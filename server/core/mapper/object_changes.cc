@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <tuple>
 
@@ -35,17 +36,28 @@ bool SawPlaceEmpty(const ObjectVisibility& seen, float empty_fraction, const Cha
   return CouldJudgePlace(seen, config) && seen.empty_fraction >= empty_fraction;
 }
 
-// The share of its points in view that a view must see through to see this object's place
-// empty: ChangeConfig::min_empty_fraction, or less for an object that the views which detected
-// it there saw solid. A keyboard or a mug whose model took in a rim of the desk around it keeps
+// The share of its points in view that a view must see through to see an object's place empty.
+struct EmptyFractions {
+  float within_session = 0.f;    // in a session that detected it there
+  float between_sessions = 0.f;  // in another session
+};
+
+// An object's baseline is what the views which detected it there saw through (their 90th
+// percentile, plus min_empty_fraction_over_present): a view that sees through clearly more saw
+// the place empty. A keyboard or a mug whose model took in a rim of the desk around it keeps
 // that rim in view when it is taken away, and a view sees through only 40 % of it; while it was
-// there, views saw through 2-6 %. What its own views measured is the object's baseline; clearly
-// above it (min_empty_fraction_over_present, over the 90th percentile) is empty.
-float EmptyFractionOf(const std::map<KeyframeId, ObjectVisibility>& visibility,
-                      const std::set<KeyframeId>& observed, const ChangeConfig& config) {
+// there, views saw through 2-6 %. A chair is seen through between its legs and the bars of its
+// back while it stands there, 40-60 % from some sides: those views are not empty. Between
+// sessions the baseline decides (objects are put down and taken away between visits). Within a
+// session that detected the object it must also reach min_empty_fraction: an object taken away
+// while the camera still looks is rare, and a bare baseline of a few views would call the
+// noisier views of a static scene empty. Without a baseline: min_empty_fraction.
+EmptyFractions EmptyFractionsOf(const std::map<KeyframeId, ObjectVisibility>& visibility,
+                                const std::set<KeyframeId>& observed, const ChangeConfig& config) {
   // Fewer views that detected it and judged its place: no baseline to speak of.
   constexpr std::size_t kMinPresentViews = 3;
-  if (!(config.min_empty_fraction_over_present > 0.f)) return config.min_empty_fraction;
+  const EmptyFractions no_baseline{config.min_empty_fraction, config.min_empty_fraction};
+  if (!(config.min_empty_fraction_over_present > 0.f)) return no_baseline;
   std::vector<float> present;
   for (const KeyframeId keyframe : observed) {
     const auto it = visibility.find(keyframe);
@@ -53,10 +65,11 @@ float EmptyFractionOf(const std::map<KeyframeId, ObjectVisibility>& visibility,
       present.push_back(it->second.empty_fraction);
     }
   }
-  if (present.size() < kMinPresentViews) return config.min_empty_fraction;
+  if (present.size() < kMinPresentViews) return no_baseline;
   const auto p90 = present.begin() + static_cast<std::ptrdiff_t>(present.size() * 9 / 10);
   std::nth_element(present.begin(), p90, present.end());
-  return std::min(config.min_empty_fraction, *p90 + config.min_empty_fraction_over_present);
+  const float baseline = std::min(1.f, *p90 + config.min_empty_fraction_over_present);
+  return {std::max(config.min_empty_fraction, baseline), baseline};
 }
 
 // What a run of views that saw a place empty says, once min_empty_views of them agree.
@@ -72,20 +85,22 @@ enum class EmptyEvidence {
 };
 
 // Scans the keyframes of `visibility` in [from, to) that did not observe the object: counts the
-// independent views that saw its place empty since the last one that saw it there. Returns the
-// keyframe at which that count reached min_empty_views (0: never, or cancelled by a later view
-// that saw it there, for kLatest), and whether any keyframe could judge the place.
+// independent views that saw its place empty (`empty_fraction_at` each keyframe) since the last
+// one that saw it there. Returns the keyframe at which that count reached min_empty_views (0:
+// never, or cancelled by a later view that saw it there, for kLatest), and whether any keyframe
+// could judge the place.
 KeyframeId EmptyViewsBetween(const std::map<KeyframeId, ObjectVisibility>& visibility,
                              const std::set<KeyframeId>& observed, KeyframeId from, KeyframeId to,
                              const std::map<KeyframeId, int>& view_of_keyframe,
-                             float empty_fraction, const ChangeConfig& config, EmptyEvidence kind,
-                             bool* judged) {
+                             const std::function<float(KeyframeId)>& empty_fraction_at,
+                             const ChangeConfig& config, EmptyEvidence kind, bool* judged) {
   std::set<int> empty_views;
   KeyframeId reached_at = 0;
   for (auto it = visibility.lower_bound(from); it != visibility.end() && it->first < to; ++it) {
     if (observed.count(it->first) > 0) continue;
     const ObjectVisibility& seen = it->second;
     if (CouldJudgePlace(seen, config) && judged != nullptr) *judged = true;
+    const float empty_fraction = empty_fraction_at(it->first);
     if (SawItThere(seen, empty_fraction, config)) {
       if (kind == EmptyEvidence::kEver && reached_at != 0) return reached_at;
       empty_views.clear();
@@ -271,13 +286,24 @@ ObjectChanges DetectChanges(const ChangeInputs& inputs, const ChangeConfig& conf
     evidence.first_seen = *observed.begin();
     evidence.last_seen = *observed.rbegin();
     const std::map<KeyframeId, ObjectVisibility>& visibility = inputs.visibility_of(object);
-    const float empty_fraction = EmptyFractionOf(visibility, observed, config);
+    auto session_of = [&inputs](KeyframeId keyframe) -> std::int64_t {
+      if (inputs.session_of_keyframe == nullptr) return 0;
+      const auto it = inputs.session_of_keyframe->find(keyframe);
+      return it == inputs.session_of_keyframe->end() ? 0 : it->second;
+    };
+    std::set<std::int64_t> detecting_sessions;
+    for (const KeyframeId keyframe : observed) detecting_sessions.insert(session_of(keyframe));
+    const EmptyFractions fractions = EmptyFractionsOf(visibility, observed, config);
+    auto empty_fraction_at = [&](KeyframeId keyframe) {
+      return detecting_sessions.count(session_of(keyframe)) > 0 ? fractions.within_session
+                                                                : fractions.between_sessions;
+    };
     evidence.seen_empty_at = EmptyViewsBetween(
         visibility, observed, evidence.last_seen + 1, kMaxKeyframeId, *inputs.view_of_keyframe,
-        empty_fraction, config, EmptyEvidence::kLatest, nullptr);
+        empty_fraction_at, config, EmptyEvidence::kLatest, nullptr);
     evidence.seen_empty_before =
         EmptyViewsBetween(visibility, observed, 0, evidence.first_seen, *inputs.view_of_keyframe,
-                          empty_fraction, config, EmptyEvidence::kEver,
+                          empty_fraction_at, config, EmptyEvidence::kEver,
                           &evidence.judged_before) != 0;
     if (evidence.seen_empty_at != 0) changes.gone.insert(id);
     // A removed object counts as what the views up to its removal made of it: those that saw it

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 
 namespace objmap {
 
@@ -92,32 +93,15 @@ bool ViewGroupingConfig::SameView(const Eigen::Isometry3d& anchor_W_C,
          Eigen::AngleAxisd(delta.linear()).angle() <= rotation_deg * M_PI / 180.0;
 }
 
-std::uint32_t SurfaceMinViews(const MapObject& object) {
-  // Fewer confirmed voxels than this: a model of one or two views, taken whole.
-  constexpr std::size_t kMinConfirmedVoxels = 32;
-  constexpr std::uint32_t kConfirmingViews = 2;
-  std::size_t confirmed = 0;
-  object.model_W.ForEachVoxel([&](const Eigen::Vector3f&, std::uint32_t views, auto) {
-    if (views >= kConfirmingViews) ++confirmed;
-    return confirmed < kMinConfirmedVoxels;
-  });
-  return confirmed >= kMinConfirmedVoxels ? kConfirmingViews : 0;
-}
-
 std::vector<Eigen::Vector3f> VisibilitySamples(const MapObject& object, int max_points) {
-  const std::uint32_t min_views = SurfaceMinViews(object);
-  std::size_t size = 0;
-  object.model_W.ForEachVoxel([&](const Eigen::Vector3f&, std::uint32_t views, auto) {
-    if (views >= min_views) ++size;
-    return true;
-  });
+  const std::size_t size = object.model_W.size();
   const std::size_t step = std::max<std::size_t>(
       1, (size + static_cast<std::size_t>(max_points) - 1) / static_cast<std::size_t>(max_points));
   std::vector<Eigen::Vector3f> samples;
   samples.reserve(std::min(size, static_cast<std::size_t>(max_points)));
   std::size_t index = 0;
-  object.model_W.ForEachVoxel([&](const Eigen::Vector3f& p, std::uint32_t views, auto) {
-    if (views >= min_views && index++ % step == 0) samples.push_back(p);
+  object.model_W.ForEachPoint([&](const Eigen::Vector3f& p) {
+    if (index++ % step == 0) samples.push_back(p);
     return true;
   });
   return samples;
@@ -194,7 +178,12 @@ std::map<KeyframeId, int> IndependentViews(const std::map<KeyframeId, Eigen::Iso
 ObjectEvidence EvidenceOf(const MapObject& object,
                           const std::map<KeyframeId, ObjectVisibility>& visibility,
                           const std::map<KeyframeId, int>& view_of_keyframe,
+                          const std::map<KeyframeId, std::int64_t>& session_of_keyframe,
                           const InventoryConfig& config) {
+  auto session_of = [&session_of_keyframe](KeyframeId keyframe) -> std::int64_t {
+    auto it = session_of_keyframe.find(keyframe);
+    return it == session_of_keyframe.end() ? 0 : it->second;
+  };
   // The best score any detection of this object had in each keyframe.
   const bool unknown = object.Label() == kUnknownClassId;
   std::map<KeyframeId, float> detected;
@@ -225,14 +214,21 @@ ObjectEvidence EvidenceOf(const MapObject& object,
     sum.detecting = sum.detecting || detecting;
     ++evidence.keyframes_seeing;
   };
-  for (const auto& [keyframe, score] : detected) add(keyframe, score, true);
+  std::set<std::int64_t> detecting_sessions;
+  for (const auto& [keyframe, score] : detected) {
+    add(keyframe, score, true);
+    detecting_sessions.insert(session_of(keyframe));
+  }
   for (const auto& [keyframe, seen] : visibility) {
     if (detected.count(keyframe) > 0 || !(seen.visible_fraction > 0.f)) continue;
     const float detectability = std::min(1.f, seen.projected_area_px / config.detectable_area_px);
-    // Only what the view measured on the object's surface could have been detected: where its
-    // depth lies behind the model the view looked through the place (the object was not there
-    // yet, or no longer), which is no miss of the detector's.
-    const float there = seen.visible_fraction * (1.f - seen.empty_fraction);
+    // Within a session that detected the object, looking through its place says the detection
+    // was wrong (a drifted pose, a phantom): a miss like any other. In another session it says
+    // the object was not there yet, or no longer: only what the view saw of its surface could
+    // have been detected.
+    const bool same_world = detecting_sessions.count(session_of(keyframe)) > 0;
+    const float there =
+        same_world ? seen.visible_fraction : seen.visible_fraction * (1.f - seen.empty_fraction);
     if (there > 0.f) add(keyframe, -config.miss_weight * there * detectability, false);
     if (seen.visible_fraction * detectability >= config.absent_min_visibility) {
       evidence.last_absent = std::max(evidence.last_absent, keyframe);

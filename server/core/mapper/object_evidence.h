@@ -98,9 +98,11 @@ struct ChangeConfig {
   /// A view saw the place empty when at least this share of its visible points was seen through
   /// ...
   float min_empty_fraction = 0.5f;
-  /// ... or this much more than the views that detected the object there saw through (their
-  /// 90th percentile; with three such views or more), when that is less: a model that took in a
-  /// rim of its support keeps the rim in view when the object goes. 0: min_empty_fraction alone.
+  /// ... and this much more than the views that detected the object there saw through (its
+  /// baseline: their 90th percentile; with three such views or more). A view of a later session
+  /// than those that detected it needs the baseline only, less or more than min_empty_fraction:
+  /// a model that took in a rim of its support keeps the rim in view when the object goes, and a
+  /// chair is seen through between its legs while it stands. 0: min_empty_fraction alone.
   float min_empty_fraction_over_present = 0.25f;
   /// Independent views (ViewGroupingConfig) that must have seen a place empty: after an
   /// object's last sighting to call it removed, before its first sighting to call it added.
@@ -136,14 +138,7 @@ struct ObjectVisibility {
   float empty_fraction = 0.f;
 };
 
-/// The fewest views that must have reached a voxel of the object's model for it to count as the
-/// object's surface: 2 when the model has enough such voxels (a voxel one view put there and no
-/// other confirmed is a stray more often than surface: a border pixel of the table, a bit of a
-/// neighbour, which would stay in view when the object is taken away), else 0 (a model of one
-/// or two views, taken whole).
-[[nodiscard]] std::uint32_t SurfaceMinViews(const MapObject& object);
-
-/// Evenly spaced points of the object's surface (SurfaceMinViews), at most `max_points`.
+/// Evenly spaced points of the object's model, at most `max_points`.
 [[nodiscard]] std::vector<Eigen::Vector3f> VisibilitySamples(const MapObject& object,
                                                              int max_points);
 
@@ -181,12 +176,16 @@ struct ObjectEvidence {
 };
 
 /// The evidence of `object` from its visibility in each keyframe (keyframes missing from
-/// `visibility` saw nothing of it) and the keyframes' independent views. For a named object
-/// only its detections count as detected (views that only segmented it are misses of the
-/// detector); for an unknown object, its segmentations (unknown_view_score).
-[[nodiscard]] ObjectEvidence EvidenceOf(const MapObject& object,
-                                        const std::map<KeyframeId, ObjectVisibility>& visibility,
-                                        const std::map<KeyframeId, int>& view_of_keyframe,
-                                        const InventoryConfig& config);
+/// `visibility` saw nothing of it), the keyframes' independent views and their mapping sessions
+/// (keyframes missing from `session_of_keyframe`: session 0). For a named object only its
+/// detections count as detected (views that only segmented it are misses of the detector); for
+/// an unknown object, its segmentations (unknown_view_score). A view that saw the object's place
+/// and did not detect it is a miss, except for the part of the place it looked through
+/// (ObjectVisibility::empty_fraction) in a session without a detection of the object: the
+/// object may have been put there or taken away between sessions, not within one.
+[[nodiscard]] ObjectEvidence EvidenceOf(
+    const MapObject& object, const std::map<KeyframeId, ObjectVisibility>& visibility,
+    const std::map<KeyframeId, int>& view_of_keyframe,
+    const std::map<KeyframeId, std::int64_t>& session_of_keyframe, const InventoryConfig& config);
 
 }  // namespace objmap
