@@ -203,6 +203,42 @@ TEST_F(MapServerChanges, ARemovedCupIsATombstoneAndAMovedOneKeepsItsId) {
   EXPECT_EQ(tombstone->state, ObjectState::kRemoved);
 }
 
+// A cup put down between the visits, detected by one view of the second: the first visit's
+// views looked through its place, which is no miss of it (it was not there then), so the one
+// detection confirms it, and a restart keeps it so (the sessions come back from the store). The
+// same views in one session leave it out: within a session the world stands still, and a
+// detection where its own views saw the table is wrong.
+TEST_F(MapServerChanges, ACupDetectedOnceWhereAnEarlierSessionSawTheTableIsConfirmed) {
+  const SceneBox cup_three{{-0.35, 0.45, 0.70}, {-0.25, 0.55, 0.82}, {30, 160, 30}};
+  auto confirmed_at = [](const MapServer& server, const SceneBox& box) {
+    const Eigen::Vector3f centre = ((box.lo + box.hi) * 0.5).cast<float>();
+    for (const auto& [id, view] : server.Snapshot()->objects) {
+      if ((view->centroid_W - centre).norm() < 0.05f) return view->confirmed;
+    }
+    ADD_FAILURE() << "no object at the box";
+    return false;
+  };
+  {
+    auto server = OpenServer();
+    ASSERT_TRUE(server);
+    MapVisit(server.get(), kFirstEyes, {kCupOne, kCupTwo});
+    ASSERT_TRUE(server->StartSession("second visit", nullptr).ok());
+    MapVisit(server.get(), {kSecondEyes[0]}, {kCupOne, kCupTwo, cup_three});
+    EXPECT_TRUE(confirmed_at(*server, cup_three));
+  }
+  {
+    auto restarted = OpenServer();
+    ASSERT_TRUE(restarted);
+    EXPECT_TRUE(confirmed_at(*restarted, cup_three));
+  }
+  RemoveDatabase(db_path_);
+  auto one_session = OpenServer();
+  ASSERT_TRUE(one_session);
+  MapVisit(one_session.get(), kFirstEyes, {kCupOne, kCupTwo});
+  MapVisit(one_session.get(), {kSecondEyes[0]}, {kCupOne, kCupTwo, cup_three});
+  EXPECT_FALSE(confirmed_at(*one_session, cup_three));
+}
+
 // kill -9 during the second visit, at several moments: the reopened map holds exactly the
 // acknowledged keyframes, both sessions, and the changes (tombstone included) that a map of those
 // keyframes has: nothing acknowledged is lost, nothing is half there.
