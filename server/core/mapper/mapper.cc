@@ -211,6 +211,13 @@ KeyframePoseLookup Mapper::Impl::PoseLookup() const {
   };
 }
 
+KeyframeSessionLookup Mapper::Impl::SessionLookup() const {
+  return [this](KeyframeId id) -> std::int64_t {
+    auto it = keyframes.find(id);
+    return it == keyframes.end() ? 0 : it->second.session;
+  };
+}
+
 // Replays every observation, keyframe by keyframe in id order, through the association with the
 // current poses, exactly as AddKeyframe would have met them. An object of the replay takes the id
 // of the old object that gave it most of its observations (each old id once, the largest shares
@@ -419,7 +426,6 @@ bool Mapper::AddKeyframe(const RgbdFrame& frame, const std::vector<Detection>& d
 
   start = Clock::now();
   impl_->occupancy.Integrate(DepthScanOf(record));
-  impl_->session_of_keyframe[result->keyframe_id] = record.session;
   impl_->keyframes.emplace(result->keyframe_id, std::move(record));
   result->timings.occupancy_ms = MillisecondsSince(start);
   return true;
@@ -484,8 +490,6 @@ RestoreOutcome Mapper::Restore(std::map<KeyframeId, KeyframeRecord> keyframes,
                                std::map<ObjectId, std::vector<ObjectObservation>> observations,
                                ObjectId next_object_id, const OccupancyCheckpoint* checkpoint) {
   impl_->keyframes = std::move(keyframes);
-  impl_->session_of_keyframe.clear();
-  for (const auto& [id, record] : impl_->keyframes) impl_->session_of_keyframe[id] = record.session;
   impl_->reach_C.clear();
   impl_->visibility_cache.clear();
   impl_->next_keyframe_id = impl_->keyframes.empty() ? 1 : impl_->keyframes.rbegin()->first + 1;

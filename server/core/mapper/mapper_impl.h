@@ -52,8 +52,7 @@ struct Mapper::Impl {
   // and recomputed when poses change; the first keyframe of the latest view is its anchor.
   std::map<KeyframeId, int> view_of_keyframe;
   KeyframeId view_anchor = 0;
-  // The mapping session of every keyframe (KeyframeRecord::session), and that of keyframes to come.
-  std::map<KeyframeId, std::int64_t> session_of_keyframe;
+  // The mapping session of keyframes to come (KeyframeRecord::session).
   std::int64_t session = 0;
   int ViewOfNewKeyframe(KeyframeId id, const Eigen::Isometry3d& T_W_C);
   // Regroups every keyframe with its current pose (the objects' observations are not touched).
@@ -61,6 +60,7 @@ struct Mapper::Impl {
 
   void Reassociate();
   KeyframePoseLookup PoseLookup() const;
+  KeyframeSessionLookup SessionLookup() const;
   void RebuildOccupancy();
   const Eigen::AlignedBox3d& ReachOf(KeyframeId id);
   void RegenerateOccupancy(const std::map<KeyframeId, Eigen::Isometry3d>& old_poses,

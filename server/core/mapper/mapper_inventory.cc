@@ -33,7 +33,7 @@ const std::map<KeyframeId, ObjectVisibility>& Mapper::Impl::VisibilityOf(
 
 ObjectEvidence Mapper::Evidence(const MapObject& object) const {
   return EvidenceOf(object, impl_->VisibilityOf(object), impl_->view_of_keyframe,
-                    impl_->session_of_keyframe, impl_->config.inventory);
+                    impl_->SessionLookup(), impl_->config.inventory);
 }
 
 bool Mapper::Impl::IsConfirmedThrough(const MapObject& object, KeyframeId through) const {
@@ -49,7 +49,7 @@ bool Mapper::Impl::IsConfirmedThrough(const MapObject& object, KeyframeId throug
   const bool whole = all.empty() || all.rbegin()->first <= through;
   if (!whole) until.insert(all.begin(), all.upper_bound(through));
   const ObjectEvidence evidence =
-      EvidenceOf(object, whole ? all : until, view_of_keyframe, session_of_keyframe, thresholds);
+      EvidenceOf(object, whole ? all : until, view_of_keyframe, SessionLookup(), thresholds);
   if (unknown && evidence.views_detecting < thresholds.unknown_min_views) return false;
   return evidence.evidence >= thresholds.min_evidence;
 }
@@ -66,7 +66,7 @@ ObjectChanges Mapper::Changes() const {
   ChangeInputs inputs;
   inputs.objects = &impl_->objects;
   inputs.view_of_keyframe = &impl_->view_of_keyframe;
-  inputs.session_of_keyframe = &impl_->session_of_keyframe;
+  inputs.session_of = impl_->SessionLookup();
   inputs.visibility_of =
       [this](const MapObject& object) -> const std::map<KeyframeId, ObjectVisibility>& {
     return impl_->VisibilityOf(object);

@@ -287,9 +287,7 @@ ObjectChanges DetectChanges(const ChangeInputs& inputs, const ChangeConfig& conf
     evidence.last_seen = *observed.rbegin();
     const std::map<KeyframeId, ObjectVisibility>& visibility = inputs.visibility_of(object);
     auto session_of = [&inputs](KeyframeId keyframe) -> std::int64_t {
-      if (inputs.session_of_keyframe == nullptr) return 0;
-      const auto it = inputs.session_of_keyframe->find(keyframe);
-      return it == inputs.session_of_keyframe->end() ? 0 : it->second;
+      return inputs.session_of ? inputs.session_of(keyframe) : 0;
     };
     std::set<std::int64_t> detecting_sessions;
     for (const KeyframeId keyframe : observed) detecting_sessions.insert(session_of(keyframe));

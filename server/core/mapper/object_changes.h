@@ -96,8 +96,8 @@ struct ChangeInputs {
   const ObjectMap* objects = nullptr;
   /// The independent view of every keyframe (ViewGroupingConfig).
   const std::map<KeyframeId, int>* view_of_keyframe = nullptr;
-  /// The mapping session of every keyframe (null, or keyframes missing: session 0).
-  const std::map<KeyframeId, std::int64_t>* session_of_keyframe = nullptr;
+  /// The mapping session of every keyframe (empty: all of one session).
+  KeyframeSessionLookup session_of;
   /// What each keyframe saw of an object (keyframes that saw none of it: absent).
   std::function<const std::map<KeyframeId, ObjectVisibility>&(const MapObject&)> visibility_of;
   /// Whether the object passed the inventory thresholds with the keyframes up to `through`

@@ -178,12 +178,7 @@ std::map<KeyframeId, int> IndependentViews(const std::map<KeyframeId, Eigen::Iso
 ObjectEvidence EvidenceOf(const MapObject& object,
                           const std::map<KeyframeId, ObjectVisibility>& visibility,
                           const std::map<KeyframeId, int>& view_of_keyframe,
-                          const std::map<KeyframeId, std::int64_t>& session_of_keyframe,
-                          const InventoryConfig& config) {
-  auto session_of = [&session_of_keyframe](KeyframeId keyframe) -> std::int64_t {
-    auto it = session_of_keyframe.find(keyframe);
-    return it == session_of_keyframe.end() ? 0 : it->second;
-  };
+                          const KeyframeSessionLookup& session_of, const InventoryConfig& config) {
   // The best score any detection of this object had in each keyframe.
   const bool unknown = object.Label() == kUnknownClassId;
   std::map<KeyframeId, float> detected;

@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -175,17 +176,20 @@ struct ObjectEvidence {
   KeyframeId last_absent = 0;
 };
 
+/// The mapping session of a keyframe (KeyframeRecord::session; 0 when not known).
+using KeyframeSessionLookup = std::function<std::int64_t(KeyframeId)>;
+
 /// The evidence of `object` from its visibility in each keyframe (keyframes missing from
-/// `visibility` saw nothing of it), the keyframes' independent views and their mapping sessions
-/// (keyframes missing from `session_of_keyframe`: session 0). For a named object only its
-/// detections count as detected (views that only segmented it are misses of the detector); for
-/// an unknown object, its segmentations (unknown_view_score). A view that saw the object's place
-/// and did not detect it is a miss, except for the part of the place it looked through
-/// (ObjectVisibility::empty_fraction) in a session without a detection of the object: the
-/// object may have been put there or taken away between sessions, not within one.
-[[nodiscard]] ObjectEvidence EvidenceOf(
-    const MapObject& object, const std::map<KeyframeId, ObjectVisibility>& visibility,
-    const std::map<KeyframeId, int>& view_of_keyframe,
-    const std::map<KeyframeId, std::int64_t>& session_of_keyframe, const InventoryConfig& config);
+/// `visibility` saw nothing of it), the keyframes' independent views and their mapping sessions.
+/// For a named object only its detections count as detected (views that only segmented it are
+/// misses of the detector); for an unknown object, its segmentations (unknown_view_score). A view
+/// that saw the object's place and did not detect it is a miss, except for the part of the place it
+/// looked through (ObjectVisibility::empty_fraction) in a session without a detection of the
+/// object: the object may have been put there or taken away between sessions, not within one.
+[[nodiscard]] ObjectEvidence EvidenceOf(const MapObject& object,
+                                        const std::map<KeyframeId, ObjectVisibility>& visibility,
+                                        const std::map<KeyframeId, int>& view_of_keyframe,
+                                        const KeyframeSessionLookup& session_of,
+                                        const InventoryConfig& config);
 
 }  // namespace objmap
