@@ -211,12 +211,9 @@ TEST_F(MapServerChanges, ARemovedCupIsATombstoneAndAMovedOneKeepsItsId) {
 TEST_F(MapServerChanges, ACupDetectedOnceWhereAnEarlierSessionSawTheTableIsConfirmed) {
   const SceneBox cup_three{{-0.35, 0.45, 0.70}, {-0.25, 0.55, 0.82}, {30, 160, 30}};
   auto confirmed_at = [](const MapServer& server, const SceneBox& box) {
-    const Eigen::Vector3f centre = ((box.lo + box.hi) * 0.5).cast<float>();
-    for (const auto& [id, view] : server.Snapshot()->objects) {
-      if ((view->centroid_W - centre).norm() < 0.05f) return view->confirmed;
-    }
-    ADD_FAILURE() << "no object at the box";
-    return false;
+    const ObjectId id = ObjectAt(server, box);
+    if (id == 0) ADD_FAILURE() << "no object at the box";
+    return id != 0 && server.Snapshot()->objects.at(id)->confirmed;
   };
   {
     auto server = OpenServer();

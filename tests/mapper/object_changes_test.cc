@@ -2,6 +2,8 @@
 // what the mapper makes of each (Mapper::Changes, ConfirmedObjects, Inventory, objects.json).
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cstdint>
 #include <nlohmann/json.hpp>
 
 #include "mapper/map_export.h"
@@ -324,6 +326,73 @@ TEST_F(ObjectChangesTest, ChangesCanBeSwitchedOff) {
   EXPECT_NE(why.find("min_empty_views"), std::string::npos) << why;
 }
 
+// Objects and what each keyframe saw of them, given to DetectChanges directly: keyframes 1..N,
+// each an independent view, all of session 1 unless told otherwise; every view has the whole
+// object in view over 5000 pixels.
+class GivenScene {
+ public:
+  explicit GivenScene(KeyframeId keyframes) {
+    for (KeyframeId keyframe = 1; keyframe <= keyframes; ++keyframe) {
+      view_of_keyframe_[keyframe] = static_cast<int>(keyframe);
+      session_of_keyframe_[keyframe] = 1;
+    }
+  }
+
+  // An object of `label`, detected with `score` in keyframes [from, to]: 40 points of `colour`
+  // along x, `spacing` apart from `x0`.
+  ObjectId AddObject(int label, float score, float x0, float spacing,
+                     const std::array<std::uint8_t, 3>& colour, KeyframeId from, KeyframeId to) {
+    ObjectId id = 0;
+    for (KeyframeId keyframe = from; keyframe <= to; ++keyframe) {
+      ObjectObservation observation;
+      observation.keyframe_id = keyframe;
+      observation.class_scores = {{label, score}};
+      for (int i = 0; i < 40; ++i) {
+        observation.segment_C.points.emplace_back(x0 + spacing * static_cast<float>(i), 0.f, 1.f);
+        observation.segment_C.colors.push_back(colour);
+      }
+      observation.view = static_cast<std::int64_t>(keyframe);
+      if (id == 0) {
+        id = objects_.AddObject(observation, Eigen::Isometry3d::Identity());
+      } else {
+        EXPECT_TRUE(objects_.AddObservation(id, observation, Eigen::Isometry3d::Identity()));
+      }
+    }
+    return id;
+  }
+
+  // What `keyframe` saw through of object `id`.
+  void See(ObjectId id, KeyframeId keyframe, float empty_fraction) {
+    seen_[id][keyframe] = {1.f, 5000.f, empty_fraction};
+  }
+  // The keyframes from `first` on are of `session`.
+  void StartSession(KeyframeId first, std::int64_t session) {
+    for (auto it = session_of_keyframe_.lower_bound(first); it != session_of_keyframe_.end();
+         ++it) {
+      it->second = session;
+    }
+  }
+
+  [[nodiscard]] ObjectChanges Changes(const ChangeConfig& config) const {
+    ChangeInputs inputs;
+    inputs.objects = &objects_;
+    inputs.view_of_keyframe = &view_of_keyframe_;
+    inputs.session_of = [this](KeyframeId keyframe) { return session_of_keyframe_.at(keyframe); };
+    inputs.visibility_of =
+        [this](const MapObject& object) -> const std::map<KeyframeId, ObjectVisibility>& {
+      return seen_.at(object.id);
+    };
+    inputs.confirmed_through = [](const MapObject&, KeyframeId) { return true; };
+    return DetectChanges(inputs, config);
+  }
+
+ private:
+  ObjectMap objects_;
+  std::map<KeyframeId, int> view_of_keyframe_;
+  std::map<KeyframeId, std::int64_t> session_of_keyframe_;
+  std::map<ObjectId, std::map<KeyframeId, ObjectVisibility>> seen_;
+};
+
 // DetectChanges on its own, with what each keyframe saw of a keyboard given: the first keyframes
 // detected it there, the later ones (independent views) saw through 40 % of it. Its model took
 // in a rim of the desk, which stays when the keyboard goes: less than min_empty_fraction (0.5),
@@ -334,38 +403,13 @@ class DetectChangesOfAKeyboard : public ::testing::Test {
   // keyframes from `second_session` on are of a second session.
   std::vector<ObjectChange> Changes(KeyframeId observing, const ChangeConfig& config,
                                     KeyframeId second_session) {
-    const int keyboard = CocoClassId("keyboard");
-    ObjectMap objects;
-    std::map<KeyframeId, int> view_of_keyframe;
-    std::map<KeyframeId, std::int64_t> session_of_keyframe;
-    std::map<KeyframeId, ObjectVisibility> seen;
+    GivenScene scene(5);
+    id_ = scene.AddObject(CocoClassId("keyboard"), 0.7f, 0.f, 0.01f, {40, 40, 40}, 1, observing);
     for (KeyframeId keyframe = 1; keyframe <= 5; ++keyframe) {
-      view_of_keyframe[keyframe] = static_cast<int>(keyframe);
-      session_of_keyframe[keyframe] = keyframe < second_session ? 1 : 2;
-      seen[keyframe] = {1.f, 5000.f, keyframe <= observing ? 0.03f : 0.4f};
-      if (keyframe > observing) continue;
-      ObjectObservation observation;
-      observation.keyframe_id = keyframe;
-      observation.class_scores = {{keyboard, 0.7f}};
-      for (int i = 0; i < 40; ++i) {
-        observation.segment_C.points.emplace_back(0.01f * static_cast<float>(i), 0.f, 1.f);
-        observation.segment_C.colors.push_back({40, 40, 40});
-      }
-      observation.view = static_cast<std::int64_t>(keyframe);
-      if (keyframe == 1) {
-        id_ = objects.AddObject(observation, Eigen::Isometry3d::Identity());
-      } else {
-        EXPECT_TRUE(objects.AddObservation(id_, observation, Eigen::Isometry3d::Identity()));
-      }
+      scene.See(id_, keyframe, keyframe <= observing ? 0.03f : 0.4f);
     }
-    ChangeInputs inputs;
-    inputs.objects = &objects;
-    inputs.view_of_keyframe = &view_of_keyframe;
-    inputs.session_of_keyframe = &session_of_keyframe;
-    inputs.visibility_of =
-        [&seen](const MapObject&) -> const std::map<KeyframeId, ObjectVisibility>& { return seen; };
-    inputs.confirmed_through = [](const MapObject&, KeyframeId) { return true; };
-    return ChangeList(DetectChanges(inputs, config));
+    scene.StartSession(second_session, 2);
+    return ChangeList(scene.Changes(config));
   }
 
   ObjectId id_ = 0;
@@ -402,44 +446,17 @@ TEST_F(DetectChangesOfAKeyboard, StaysWithTooFewViewsOfItThereToCompareWith) {
 // views that detected it saw through 45-55 % of it. Later views that see through 60 % of it, in
 // the session that detected it or in a later one, saw it there, not an empty place.
 TEST_F(DetectChangesOfAKeyboard, AThingItsOwnViewsSawThroughHalfOfNeedsMoreToBeGone) {
-  const int chair = CocoClassId("chair");
-  ObjectMap objects;
-  std::map<KeyframeId, int> view_of_keyframe;
-  std::map<KeyframeId, std::int64_t> session_of_keyframe;
-  std::map<KeyframeId, ObjectVisibility> seen;
-  ObjectId id = 0;
+  GivenScene scene(7);
+  const ObjectId id = scene.AddObject(CocoClassId("chair"), 0.7f, 0.f, 0.01f, {90, 60, 30}, 1, 3);
   for (KeyframeId keyframe = 1; keyframe <= 7; ++keyframe) {
-    view_of_keyframe[keyframe] = static_cast<int>(keyframe);
-    session_of_keyframe[keyframe] = keyframe <= 5 ? 1 : 2;
-    const bool detecting = keyframe <= 3;
-    seen[keyframe] = {1.f, 5000.f, detecting ? 0.45f + 0.05f * (keyframe - 1) / 2.f : 0.6f};
-    if (!detecting) continue;
-    ObjectObservation observation;
-    observation.keyframe_id = keyframe;
-    observation.class_scores = {{chair, 0.7f}};
-    for (int i = 0; i < 40; ++i) {
-      observation.segment_C.points.emplace_back(0.01f * static_cast<float>(i), 0.f, 1.f);
-      observation.segment_C.colors.push_back({90, 60, 30});
-    }
-    observation.view = static_cast<std::int64_t>(keyframe);
-    if (keyframe == 1) {
-      id = objects.AddObject(observation, Eigen::Isometry3d::Identity());
-    } else {
-      ASSERT_TRUE(objects.AddObservation(id, observation, Eigen::Isometry3d::Identity()));
-    }
+    scene.See(id, keyframe, keyframe <= 3 ? 0.45f + 0.05f * (keyframe - 1) / 2.f : 0.6f);
   }
-  ChangeInputs inputs;
-  inputs.objects = &objects;
-  inputs.view_of_keyframe = &view_of_keyframe;
-  inputs.session_of_keyframe = &session_of_keyframe;
-  inputs.visibility_of =
-      [&seen](const MapObject&) -> const std::map<KeyframeId, ObjectVisibility>& { return seen; };
-  inputs.confirmed_through = [](const MapObject&, KeyframeId) { return true; };
-  EXPECT_TRUE(ChangeList(DetectChanges(inputs, ChangeConfig{})).empty());
+  scene.StartSession(6, 2);
+  EXPECT_TRUE(ChangeList(scene.Changes(ChangeConfig{})).empty());
   // Without the baseline, 60 % is empty.
   ChangeConfig absolute_only;
   absolute_only.min_empty_fraction_over_present = 0.f;
-  EXPECT_EQ(ChangeList(DetectChanges(inputs, absolute_only)).size(), 1u);
+  EXPECT_EQ(ChangeList(scene.Changes(absolute_only)).size(), 1u);
 }
 
 // Two mugs of one make arrive while one goes: one where earlier views saw nothing but the
@@ -448,51 +465,18 @@ TEST_F(DetectChangesOfAKeyboard, AThingItsOwnViewsSawThroughHalfOfNeedsMoreToBeG
 // either way, and is reported added.
 TEST(DetectChangesPairing, TheArrivalOnlyAMoveExplainsIsTheMove) {
   const int cup = CocoClassId("cup");
-  ObjectMap objects;
-  std::map<KeyframeId, int> view_of_keyframe;
-  for (KeyframeId keyframe = 1; keyframe <= 6; ++keyframe) {
-    view_of_keyframe[keyframe] = static_cast<int>(keyframe);
-  }
-  // Mugs of 40 points along x from `x0`, seen in keyframes [from, to].
-  auto mug = [&](float x0, KeyframeId from, KeyframeId to) {
-    ObjectId id = 0;
-    for (KeyframeId keyframe = from; keyframe <= to; ++keyframe) {
-      ObjectObservation observation;
-      observation.keyframe_id = keyframe;
-      observation.class_scores = {{cup, 0.8f}};
-      for (int i = 0; i < 40; ++i) {
-        observation.segment_C.points.emplace_back(x0 + 0.002f * static_cast<float>(i), 0.f, 1.f);
-        observation.segment_C.colors.push_back({200, 200, 210});
-      }
-      observation.view = static_cast<std::int64_t>(keyframe);
-      if (id == 0) {
-        id = objects.AddObject(observation, Eigen::Isometry3d::Identity());
-      } else {
-        EXPECT_TRUE(objects.AddObservation(id, observation, Eigen::Isometry3d::Identity()));
-      }
-    }
-    return id;
-  };
-  const ObjectId gone = mug(0.f, 1, 3);
-  const ObjectId on_the_floor = mug(1.f, 4, 6);
-  const ObjectId on_the_table = mug(2.f, 4, 6);
-  // What each keyframe saw of each place: empty fraction per keyframe.
-  std::map<ObjectId, std::map<KeyframeId, ObjectVisibility>> seen;
+  GivenScene scene(6);
+  const ObjectId gone = scene.AddObject(cup, 0.8f, 0.f, 0.002f, {200, 200, 210}, 1, 3);
+  const ObjectId on_the_floor = scene.AddObject(cup, 0.8f, 1.f, 0.002f, {200, 200, 210}, 4, 6);
+  const ObjectId on_the_table = scene.AddObject(cup, 0.8f, 2.f, 0.002f, {200, 200, 210}, 4, 6);
+  // What each keyframe saw of each place.
   for (KeyframeId keyframe = 1; keyframe <= 6; ++keyframe) {
     const bool first_visit = keyframe <= 3;
-    seen[gone][keyframe] = {1.f, 5000.f, first_visit ? 0.f : 0.9f};
-    seen[on_the_floor][keyframe] = {1.f, 5000.f, 0.f};
-    seen[on_the_table][keyframe] = {1.f, 5000.f, first_visit ? 0.9f : 0.f};
+    scene.See(gone, keyframe, first_visit ? 0.f : 0.9f);
+    scene.See(on_the_floor, keyframe, 0.f);
+    scene.See(on_the_table, keyframe, first_visit ? 0.9f : 0.f);
   }
-  ChangeInputs inputs;
-  inputs.objects = &objects;
-  inputs.view_of_keyframe = &view_of_keyframe;
-  inputs.visibility_of =
-      [&seen](const MapObject& object) -> const std::map<KeyframeId, ObjectVisibility>& {
-    return seen.at(object.id);
-  };
-  inputs.confirmed_through = [](const MapObject&, KeyframeId) { return true; };
-  const ObjectChanges changes = DetectChanges(inputs, ChangeConfig{});
+  const ObjectChanges changes = scene.Changes(ChangeConfig{});
   EXPECT_EQ(changes.PublishedId(on_the_floor), gone);
   ASSERT_EQ(changes.histories.count(gone), 1u);
   EXPECT_EQ(changes.histories.at(gone).state, ObjectState::kMoved);
