@@ -61,6 +61,10 @@ run_scene() {
   "${CLI}" eval "${map}" --changes "${second}/changes.json" --gt "${second}/ground_truth.json" \
     --gt-before "${first}/ground_truth.json" --since-session 2 --json >"${map}.eval.json" \
     2>/dev/null
+  # The same, with look-alike objects' changes scored as the ground truth writes them.
+  "${CLI}" eval "${map}" --changes "${second}/changes.json" --gt "${second}/ground_truth.json" \
+    --gt-before "${first}/ground_truth.json" --since-session 2 --lookalikes-as-written --json \
+    >"${map}.strict.eval.json" 2>/dev/null
   "${CLI}" eval "${alone}" --gt "${second}/ground_truth.json" --json >"${alone}.eval.json" \
     2>/dev/null
 }
@@ -85,7 +89,8 @@ import json, os, re, sys
 out, poses, kinds, seeds = sys.argv[1], sys.argv[2], sys.argv[3].split(), sys.argv[4].split()
 kinds_of_change = ["removed", "moved", "added", "all"]
 pooled = {k: {"real": 0, "reported": 0, "tp": 0, "fp": 0, "fn": 0} for k in kinds_of_change}
-kept = total_moves = 0
+kept = total_moves = reread = 0
+strict = {"tp": 0, "fp": 0, "real": 0}
 objects = {"map": {"tp": 0, "fp": 0, "fn": 0, "real": 0, "dup": 0},
            "alone": {"tp": 0, "fp": 0, "fn": 0, "real": 0, "dup": 0}}
 def ratio(a, b):
@@ -109,6 +114,11 @@ for kind in kinds:
             line += f"{c['precision']:>7.2f}/{c['recall']:<6.2f}"
         kept += changes["moved_kept_id"]
         total_moves += changes["moved_total"]
+        reread += changes["lookalike_groups_reread"]
+        with open(base + "-map.strict.eval.json") as f:
+            strict_all = json.load(f)["changes"]["all"]
+        for key in strict:
+            strict[key] += strict_all[key]
         # Keyframes of session 2 that were mapped, from the map run's log.
         placed = "-"
         with open(base + "-map.log") as f:
@@ -136,6 +146,9 @@ for k in kinds_of_change:
           f"fp {p['fp']:>3}  fn {p['fn']:>3}  precision {ratio(p['tp'], p['tp'] + p['fp']):.3f}"
           f"  recall {ratio(p['tp'], p['real']):.3f}")
 print(f"  moved objects that kept their id: {kept} of {total_moves}")
+print(f"  groups of look-alikes read as the reports pair them: {reread}; as the ground truth "
+      f"writes them: precision {ratio(strict['tp'], strict['tp'] + strict['fp']):.3f} "
+      f"recall {ratio(strict['tp'], strict['real']):.3f}")
 for name in ("map", "alone"):
     o = objects[name]
     label = "two-session map" if name == "map" else "session 2 alone"

@@ -28,6 +28,7 @@ constexpr char kEvalUsage[] =
     "usage: objmap eval <map-dir | ADDR> (--gt ground_truth.json | --inventory counts.json)\n"
     "       objmap eval <map-dir> --changes changes.json [--since-session S]\n"
     "                   [--gt-before ground_truth.json] [--gt ground_truth.json]\n"
+    "                   [--lookalikes-as-written]\n"
     "  <map-dir>                 folder written by `objmap map --out` or `objmap export\n"
     "                            --objects` (objects.json and the .ply models); with\n"
     "                            --changes, by `objmap map --map` (its changes.json)\n"
@@ -44,6 +45,9 @@ constexpr char kEvalUsage[] =
     "                            (default: every session)\n"
     "  --gt-before FILE          ground_truth.json of the first session: sizes of removed\n"
     "                            objects and of moved ones at their old place\n"
+    "  --lookalikes-as-written   score the changes of look-alike objects (same class, mesh and\n"
+    "                            size) as the ground truth writes them (default: read them\n"
+    "                            the way that matches the reports best, see below)\n"
     "  --json                    print the scores as JSON (with --changes and --gt or\n"
     "                            --inventory: the change scores under \"changes\")\n"
     "Objects are matched per class (see docs/evaluation.md); the table has per class the real\n"
@@ -53,7 +57,12 @@ constexpr char kEvalUsage[] =
     "max(0.25 m, half the object's largest size when a ground truth gives it) of its place (a\n"
     "move: of both places), nearest pairs first. A move counts as having kept its id when one\n"
     "\"moved\" report matches it and the map still holds that object id; a move reported as a\n"
-    "removal and an addition is a missed move, and the two reports are false positives.\n";
+    "removal and an addition is a missed move, and the two reports are false positives.\n"
+    "Look-alikes cannot be told apart but by their place: a cup removed and the same cup\n"
+    "(mesh) added elsewhere is as well a move, and of two identical mugs, which one moved and\n"
+    "which one arrived is not to be seen. Their changes are read with the places they emptied\n"
+    "and filled paired into moves as the reports pair them, never into fewer moves than the\n"
+    "ground truth has; the scores say how many groups were read so.\n";
 
 constexpr int kOk = 0, kError = 1, kUsage = 2;
 
@@ -304,6 +313,7 @@ struct ChangeInputs {
   std::string gt_before_path;  ///< may be empty
   std::string gt_after_path;   ///< may be empty
   std::int64_t since_session = 0;
+  bool lookalikes_as_written = false;
 };
 
 // Reads a ground-truth file when one is named; none leaves `objects` empty.
@@ -336,6 +346,7 @@ nlohmann::ordered_json ChangesJson(const ChangeEvaluation& e, std::int64_t since
   document["moved_kept_id"] = e.moved_kept_id;
   document["moved_total"] = e.moved_total;
   document["moved_as_removed_and_added"] = e.moved_as_removed_and_added;
+  document["lookalike_groups_reread"] = e.lookalike_groups_reread;
   document["ids_checked"] = ids_checked;
   nlohmann::ordered_json matches = nlohmann::ordered_json::array();
   for (const ChangeMatch& match : e.matches) {
@@ -366,6 +377,12 @@ void PrintChanges(const ChangeEvaluation& e, std::int64_t since_session, bool id
   if (e.moved_as_removed_and_added > 0) {
     std::printf("moves reported as a removal and an addition (missed moves): %d\n",
                 e.moved_as_removed_and_added);
+  }
+  if (e.lookalike_groups_reread > 0) {
+    std::printf(
+        "groups of look-alike objects whose changes were read as the reports pair them: "
+        "%d\n",
+        e.lookalike_groups_reread);
   }
   if (e.totals.unseen > 0) {
     std::printf("%d real change(s) of objects the second session never showed are not counted\n",
@@ -417,6 +434,7 @@ int EvaluateChangeDetection(const ChangeInputs& inputs, const std::vector<Mapped
   }
   ChangeEvaluationConfig config;
   config.min_session_id = inputs.since_session;
+  config.lookalikes_interchangeable = !inputs.lookalikes_as_written;
   std::vector<ReportedChange> reported;
   std::vector<GroundTruthChange> real;
   std::vector<GroundTruthObject> before, after;
@@ -455,7 +473,7 @@ int RunEvalCommand(int argc, char** argv) {
   Arguments args(
       argc, argv,
       {"--gt", "--inventory", "--octomap", "--changes", "--gt-before", "--since-session"},
-      {"--json", "--help"});
+      {"--json", "--help", "--lookalikes-as-written"});
   if (args.Has("--help")) {
     std::cout << kEvalUsage;
     return kOk;
@@ -465,7 +483,8 @@ int RunEvalCommand(int argc, char** argv) {
   const std::int64_t since_session = args.GetInteger("--since-session", 0, 1);
   if (!args.error().empty() || args.positional().size() != 1 ||
       (args.Has("--gt") && args.Has("--inventory")) || (!objects && !changes) ||
-      (!changes && (args.Has("--gt-before") || args.Has("--since-session")))) {
+      (!changes && (args.Has("--gt-before") || args.Has("--since-session") ||
+                    args.Has("--lookalikes-as-written")))) {
     std::cerr << (args.error().empty() ? "" : args.error() + "\n") << kEvalUsage;
     return kUsage;
   }
@@ -488,8 +507,12 @@ int RunEvalCommand(int argc, char** argv) {
   }
   if (changes) {
     if (objects && !json) std::cout << "\n";
-    const ChangeInputs inputs{source, args.Get("--changes", ""), args.Get("--gt-before", ""),
-                              args.Get("--gt", ""), since_session};
+    const ChangeInputs inputs{source,
+                              args.Get("--changes", ""),
+                              args.Get("--gt-before", ""),
+                              args.Get("--gt", ""),
+                              since_session,
+                              args.Has("--lookalikes-as-written")};
     const int code = EvaluateChangeDetection(inputs, objects ? &mapped : nullptr,
                                              json ? &change_scores : nullptr);
     if (code != kOk) return code;

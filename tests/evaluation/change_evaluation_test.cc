@@ -239,6 +239,111 @@ TEST(EvaluateChanges, UnseenAndUnknownAreCountedApart) {
   EXPECT_DOUBLE_EQ(e.totals.Recall(), 1.0);
 }
 
+// Two mugs of one make: same class, same mesh, same size.
+GroundTruthChange Mug(ChangeKind kind, int id, const Eigen::Vector3d& place,
+                      const Eigen::Vector3d& from = Eigen::Vector3d::Zero()) {
+  GroundTruthChange change = Real(kind, id, "cup", place, from);
+  change.mesh_vertices = 812;
+  change.mesh_triangles = 1620;
+  change.size_m = {0.12, 0.09, 0.1};
+  return change;
+}
+
+const Eigen::Vector3d kDesk(1, 0, 0.8), kShelf(4, 0, 1.2), kSink(0, 3, 0.9);
+
+TEST(EvaluateChanges, ALookAlikeTakenAwayAndPutDownElsewhereReadsAsAMove) {
+  // The ground truth: the mug on the desk taken away, a new one of the same make on the shelf.
+  // The map saw one mug leave the desk and one arrive on the shelf: a move.
+  const std::vector<GroundTruthChange> real = {Mug(ChangeKind::kRemoved, 4, kDesk),
+                                               Mug(ChangeKind::kAdded, 9, kShelf)};
+  const std::vector<ReportedChange> reports = {
+      Report(ChangeKind::kMoved, 12, "cup", kShelf, kDesk)};
+  const std::vector<MappedObject> present = {Present(12)};
+  const ChangeEvaluation e = EvaluateChanges(real, reports, &present, {});
+  EXPECT_EQ(e.lookalike_groups_reread, 1);
+  EXPECT_EQ(e.totals.real, 1);
+  EXPECT_EQ(e.totals.true_positives, 1);
+  EXPECT_EQ(e.totals.false_positives, 0);
+  EXPECT_EQ(e.moved_kept_id, 1);
+  // Reported as seen (removed, added), the ground truth as written matches best, and stays.
+  const std::vector<ReportedChange> as_seen = {Report(ChangeKind::kRemoved, 12, "cup", kDesk),
+                                               Report(ChangeKind::kAdded, 30, "cup", kShelf)};
+  const ChangeEvaluation seen = EvaluateChanges(real, as_seen, &present, {});
+  EXPECT_EQ(seen.lookalike_groups_reread, 0);
+  EXPECT_EQ(seen.totals.true_positives, 2);
+  EXPECT_EQ(seen.totals.real, 2);
+  // As written, the move matches nothing: a false move, a missed removal and addition.
+  ChangeEvaluationConfig as_written;
+  as_written.lookalikes_interchangeable = false;
+  const ChangeEvaluation strict = EvaluateChanges(real, reports, &present, as_written);
+  EXPECT_EQ(strict.lookalike_groups_reread, 0);
+  EXPECT_EQ(strict.totals.true_positives, 0);
+  EXPECT_EQ(strict.totals.false_positives, 1);
+  EXPECT_EQ(strict.totals.misses, 2);
+}
+
+TEST(EvaluateChanges, WhichOfTwoIdenticalMugsMovedIsNotToBeSeen) {
+  // The desk's mug went to the shelf and a new mug of the same make stands at the sink. A map
+  // that has the desk's mug going to the sink and a new one on the shelf describes the same room.
+  const std::vector<GroundTruthChange> real = {Mug(ChangeKind::kMoved, 4, kShelf, kDesk),
+                                               Mug(ChangeKind::kAdded, 9, kSink)};
+  const std::vector<ReportedChange> reports = {Report(ChangeKind::kMoved, 12, "cup", kSink, kDesk),
+                                               Report(ChangeKind::kAdded, 30, "cup", kShelf)};
+  const std::vector<MappedObject> present = {Present(12), Present(30)};
+  const ChangeEvaluation e = EvaluateChanges(real, reports, &present, {});
+  EXPECT_EQ(e.lookalike_groups_reread, 1);
+  EXPECT_EQ(e.totals.true_positives, 2);
+  EXPECT_EQ(e.totals.false_positives, 0);
+  EXPECT_EQ(e.moved_kept_id, 1);
+}
+
+TEST(EvaluateChanges, AMoveIsNeverReadAsARemovalAndAnAddition) {
+  // A moved mug reported as taken away and put down loses its identity whatever else there is:
+  // no reading turns the real move into two changes to match the two reports.
+  const std::vector<GroundTruthChange> real = {Mug(ChangeKind::kMoved, 4, kShelf, kDesk),
+                                               Mug(ChangeKind::kAdded, 9, kSink)};
+  const std::vector<ReportedChange> reports = {Report(ChangeKind::kRemoved, 12, "cup", kDesk),
+                                               Report(ChangeKind::kAdded, 30, "cup", kShelf),
+                                               Report(ChangeKind::kAdded, 31, "cup", kSink)};
+  const ChangeEvaluation e = EvaluateChanges(real, reports, nullptr, {});
+  EXPECT_EQ(e.Of(ChangeKind::kMoved).misses, 1);
+  EXPECT_EQ(e.moved_as_removed_and_added, 1);
+  EXPECT_EQ(e.totals.true_positives, 1);  // the sink's mug
+}
+
+TEST(EvaluateChanges, ObjectsThatDifferInSizeOrMeshAreNotLookAlikes) {
+  GroundTruthChange desk_mug = Mug(ChangeKind::kRemoved, 4, kDesk);
+  GroundTruthChange shelf_mug = Mug(ChangeKind::kAdded, 9, kShelf);
+  EXPECT_TRUE(LookAlike(desk_mug, shelf_mug));
+  shelf_mug.size_m.x() += 0.02;  // a larger mug of the same design
+  EXPECT_FALSE(LookAlike(desk_mug, shelf_mug));
+  const std::vector<ReportedChange> reports = {
+      Report(ChangeKind::kMoved, 12, "cup", kShelf, kDesk)};
+  EXPECT_EQ(EvaluateChanges({desk_mug, shelf_mug}, reports, nullptr, {}).totals.true_positives, 0);
+  shelf_mug = Mug(ChangeKind::kAdded, 9, kShelf);
+  shelf_mug.mesh_vertices = 640;  // another make
+  EXPECT_FALSE(LookAlike(desk_mug, shelf_mug));
+  desk_mug.mesh_vertices = shelf_mug.mesh_vertices = 0;  // no mesh given: nothing to compare
+  EXPECT_FALSE(LookAlike(desk_mug, shelf_mug));
+}
+
+TEST(AttachGroundTruthSizes, GivesEachChangeItsMeshForTheLookAlikeTest) {
+  std::vector<GroundTruthChange> real = {Real(ChangeKind::kRemoved, 4, "cup", kDesk),
+                                         Real(ChangeKind::kAdded, 9, "cup", kShelf)};
+  GroundTruthObject before_mug, after_mug;
+  before_mug.id = 4;
+  after_mug.id = 9;
+  for (GroundTruthObject* mug : {&before_mug, &after_mug}) {
+    mug->size_m = {0.12, 0.09, 0.1};
+    mug->mesh_vertices_W.assign(3, Eigen::Vector3f::Zero());
+    mug->mesh_triangles.assign(1, Eigen::Vector3i(0, 1, 2));
+  }
+  EXPECT_TRUE(AttachGroundTruthSizes({before_mug}, {after_mug}, &real).empty());
+  EXPECT_EQ(real[0].mesh_vertices, 3);
+  EXPECT_EQ(real[1].mesh_triangles, 1);
+  EXPECT_TRUE(LookAlike(real[0], real[1]));
+}
+
 TEST(AttachGroundTruthSizes, NamesChangesMissingFromTheGivenFiles) {
   std::vector<GroundTruthChange> real = RealChanges();
   GroundTruthObject cup, chair_then, chair_now;

@@ -147,6 +147,48 @@ TEST_F(EvalChangesCommand, MoveReportedAsRemovalAndAdditionIsNotKept) {
   EXPECT_EQ(scores["added"]["fp"], 1);
 }
 
+TEST_F(EvalChangesCommand, LookAlikesAreReadAsTheReportsPairThemUnlessAskedNotTo) {
+  // A mug taken from the desk, a new mug of the same mesh and size put on the shelf; the map saw
+  // one mug go from the desk to the shelf.
+  std::ofstream(dir_ / "changes.json") << R"({"format": "objmap-changes-1",
+    "removed": [{"id": 4, "class": "cup", "position": [1, 0, 0.8]}],
+    "moved": [],
+    "added": [{"id": 9, "class": "cup", "position": [4, 0, 1.2]}]})";
+  const std::string mesh =
+      R"("size": [0.12, 0.09, 0.1], "surface_mesh": {"vertices": [[0,0,0], [0.1,0,0],
+       [0,0.1,0]], "triangles": [[0, 1, 2]]}})";
+  std::ofstream(dir_ / "gt_before.json") << R"({"objects": [{"id": 4, "class": "cup",
+      "pose": [1,0,0,1, 0,1,0,0, 0,0,1,0.8, 0,0,0,1], )"
+                                         << mesh << "]}";
+  std::ofstream(dir_ / "gt_after.json") << R"({"objects": [{"id": 9, "class": "cup",
+      "pose": [1,0,0,4, 0,1,0,0, 0,0,1,1.2, 0,0,0,1], )"
+                                        << mesh << "]}";
+  std::ofstream(dir_ / "map" / "changes.json") << R"({"format": "objmap-map-changes-1",
+    "changes": [{"kind": "moved", "object_id": 6, "class": "cup", "session_id": 2,
+                 "position": [4, 0.02, 1.2], "from": [1, 0, 0.8]}]})";
+  const std::string given =
+      " --gt-before " + Path("gt_before.json") + " --gt " + Path("gt_after.json") + " --json";
+  const auto run = RunObjmap(Changes() + given);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const nlohmann::json read = nlohmann::json::parse(run.output)["changes"];
+  EXPECT_EQ(read["lookalike_groups_reread"], 1) << run.output;
+  EXPECT_EQ(read["moved"]["tp"], 1);
+  EXPECT_EQ(read["all"]["real"], 1);
+  EXPECT_EQ(read["all"]["fp"], 0);
+  const auto strict = RunObjmap(Changes() + given + " --lookalikes-as-written");
+  ASSERT_EQ(strict.exit_code, 0) << strict.output;
+  const nlohmann::json as_written = nlohmann::json::parse(strict.output)["changes"];
+  EXPECT_EQ(as_written["lookalike_groups_reread"], 0);
+  EXPECT_EQ(as_written["all"]["tp"], 0);
+  EXPECT_EQ(as_written["all"]["fn"], 2);
+  EXPECT_EQ(as_written["moved"]["fp"], 1);
+  // The flag belongs to --changes.
+  EXPECT_EQ(RunObjmap("eval " + Path("map") + " --gt " + Path("gt_after.json") +
+                      " --lookalikes-as-written")
+                .exit_code,
+            2);
+}
+
 TEST_F(EvalChangesCommand, BadUseAndBadFilesAreNamed) {
   // --since-session and --gt-before belong to --changes; --since-session counts from 1.
   EXPECT_EQ(

@@ -37,7 +37,17 @@ struct GroundTruthChange {
   /// Frames of the second session that showed it where it is now (-1: not known); see
   /// GroundTruthObject::visible_frames. Known only for objects present in the second session.
   int visible_frames = -1;
+  /// What the object looks like, to tell look-alikes (see LookAlike): its surface mesh's vertex
+  /// and triangle counts (0: no mesh given) and its box size.
+  int mesh_vertices = 0;
+  int mesh_triangles = 0;
+  Eigen::Vector3d size_m = Eigen::Vector3d::Zero();
 };
+
+/// Two changes are of look-alike objects when nothing but their place tells them apart: the same
+/// class, the same surface mesh (vertex and triangle counts) and the same box size within 5 mm
+/// per side. Changes without a mesh are never look-alikes.
+[[nodiscard]] bool LookAlike(const GroundTruthChange& a, const GroundTruthChange& b);
 
 /// A change a map reports (the map folder's changes.json).
 struct ReportedChange {
@@ -69,6 +79,14 @@ struct ChangeEvaluationConfig {
   /// Real changes whose object the second session showed in fewer frames than this (when its
   /// ground truth says) are left out, counted as unseen: no map can report what it never saw.
   int min_visible_frames = 1;
+  /// Look-alike objects are interchangeable: a cup taken from the desk and the same cup (the same
+  /// mesh) put on the shelf read as well as "the cup moved to the shelf", and of two identical
+  /// mugs, which one moved and which one arrived cannot be seen. For each group of look-alikes the
+  /// real changes are read in the way that matches the reports best: the places the group emptied
+  /// (removals, moves' old places) paired with the places it filled (additions, moves' new
+  /// places) into moves differently, never into fewer moves than the ground truth has (a move
+  /// reported as a removal and an addition stays a missed move). false: as written.
+  bool lookalikes_interchangeable = true;
 
   [[nodiscard]] bool IsValid(std::string* why) const;
 };
@@ -110,6 +128,10 @@ struct ChangeEvaluation {
   /// Real moves the map missed as a move but reported as a removal at the old place and an
   /// addition at the new one (both also counted as false positives of their kinds).
   int moved_as_removed_and_added = 0;
+  /// Groups of look-alike objects whose changes were read otherwise than the ground truth writes
+  /// them (ChangeEvaluationConfig::lookalikes_interchangeable); the counts above are of that
+  /// reading.
+  int lookalike_groups_reread = 0;
 
   [[nodiscard]] const ChangeCounts& Of(ChangeKind kind) const {
     return per_kind[static_cast<int>(kind)];
@@ -132,6 +154,8 @@ struct ChangeEvaluation {
 /// reported as a removal and an addition is a missed move and two false positives: the map lost
 /// the object's identity, which a move keeps.
 /// `present` may be null: ids are then not checked, and every matched move kept its id.
+/// Changes of look-alike objects are read as ChangeEvaluationConfig::lookalikes_interchangeable
+/// says.
 [[nodiscard]] ChangeEvaluation EvaluateChanges(const std::vector<GroundTruthChange>& real,
                                                const std::vector<ReportedChange>& reported,
                                                const std::vector<MappedObject>* present,
