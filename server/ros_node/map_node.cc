@@ -244,7 +244,7 @@ void MapNode::Impl::OnFrame(const sensor_msgs::ImageConstPtr& color,
   } else if (!config.run_detector) {
     given.emplace();  // structure only
   }
-  MapFrame(std::move(frame), stamp, std::move(given));
+  TakeFrame(std::move(frame), stamp, std::move(given));
 }
 
 void MapNode::Impl::ReadCameraLoop() {
@@ -283,7 +283,7 @@ void MapNode::Impl::ReadCameraLoop() {
       frame.stamp_s = stamp.toSec();
       std::optional<std::vector<Detection>> detections;
       if (!config.run_detector) detections.emplace();  // structure only
-      MapFrame(std::move(frame), stamp, std::move(detections));
+      TakeFrame(std::move(frame), stamp, std::move(detections));
     }
     ++frames_received;
   }
@@ -311,13 +311,13 @@ bool MapNode::Impl::TrackFrame(RgbdFrame* frame, const ros::Time& stamp,
     *why = "tracking lost: " + report.why;
     return false;
   }
-  if (report.status == TrackingStatus::kProvisional) {
-    // Tracked in a frame of its own until a frame is placed in the map: nothing to publish
-    // or map in the map's frame yet.
-    *why = "not placed in the map yet: " + report.why;
-    return false;
-  }
   frame->T_W_C = report.T_W_C;
+  if (report.status == TrackingStatus::kProvisional) {
+    // Tracked in a frame of its own until a frame is placed in the map: nothing to publish in
+    // the map's frame yet; TakeFrame holds it.
+    last_tracking = report;
+    return true;
+  }
   geometry_msgs::TransformStamped transform;
   transform.header.stamp = stamp;
   transform.header.frame_id = config.world_frame;
@@ -352,6 +352,85 @@ void MapNode::Impl::PublishTrajectory() {
     path.poses.push_back(pose);
   }
   trajectory_pub.publish(path);
+}
+
+void MapNode::Impl::TakeFrame(RgbdFrame frame, const ros::Time& stamp,
+                              std::optional<std::vector<Detection>> detections) {
+  if (last_tracking && last_tracking->status == TrackingStatus::kProvisional) {
+    return HoldFrame(std::move(frame), stamp, std::move(detections));
+  }
+  if (last_tracking && last_tracking->attached_fragment > 0) {
+    MapHeldFrames(last_tracking->attached_fragment);
+  }
+  MapFrame(std::move(frame), stamp, std::move(detections));
+}
+
+void MapNode::Impl::HoldFrame(RgbdFrame frame, const ros::Time& stamp,
+                              std::optional<std::vector<Detection>> detections) {
+  const TrackingReport& report = *last_tracking;
+  if (!part_keyframe_selector || part_of_selector != report.fragment) {
+    part_keyframe_selector.emplace(config.objmap.keyframes);
+    part_of_selector = report.fragment;
+  }
+  if (!part_keyframe_selector->IsKeyframe(report.T_W_C)) return;
+  const auto limit = static_cast<std::size_t>(config.objmap.map_server.max_held_keyframes);
+  if (limit == 0) {
+    return Reject(stamp, "not placed in the map yet (" + report.why +
+                             "), and server.max_held_keyframes is 0: not held");
+  }
+  HeldFrame held;
+  held.frame = std::move(frame);
+  held.stamp = stamp;
+  held.detections = std::move(detections);
+  held.odometry_keyframe = report.reference_keyframe;
+  held.T_K_C = odometry->KeyframePose(report.reference_keyframe).inverse() * report.T_W_C;
+  held_frames[report.fragment].push_back(std::move(held));
+  ++held_count;
+  while (held_count > limit && !held_frames.empty()) {
+    // The oldest part's first keyframe goes: a part that long unplaced is the least likely to
+    // be placed.
+    auto oldest = held_frames.begin();
+    Reject(oldest->second.front().stamp,
+           "held " + std::to_string(limit) +
+               " keyframes of parts of the session not placed in the map (server."
+               "max_held_keyframes): the oldest is dropped");
+    oldest->second.erase(oldest->second.begin());
+    --held_count;
+    if (oldest->second.empty()) held_frames.erase(oldest);
+  }
+  keyframes_held = static_cast<long long>(held_count);
+  ROS_INFO_STREAM_THROTTLE(5.0, "objmap_node: not placed in the map yet ("
+                                    << report.why << "); " << held_count
+                                    << " keyframe(s) held until the session's part is placed");
+}
+
+void MapNode::Impl::MapHeldFrames(int fragment) {
+  const auto found = held_frames.find(fragment);
+  if (found == held_frames.end()) return;
+  std::vector<HeldFrame> frames = std::move(found->second);
+  held_frames.erase(found);
+  held_count -= frames.size();
+  keyframes_held = static_cast<long long>(held_count);
+  for (HeldFrame& held : frames) {
+    held.frame.T_W_C = odometry->KeyframePose(held.odometry_keyframe) * held.T_K_C;
+    AddKeyframeOutcome outcome;
+    const ServiceStatus status =
+        server->AddKeyframe(std::move(held.frame), std::move(held.detections), &outcome);
+    if (!status.ok()) {
+      Reject(held.stamp, "a held keyframe of the part just placed was refused by the map server: " +
+                             status.message);
+      continue;
+    }
+    ++keyframes_sent;
+    ++keyframes_attached;
+    if (outcome.keyframe_id == 0) continue;  // kept as a revisit of a stored view
+    tracked_keyframes.AddRelative(outcome.keyframe_id, held.odometry_keyframe, held.T_K_C);
+    keyframe_stamps[outcome.keyframe_id] = held.stamp;
+  }
+  ROS_INFO_STREAM("objmap_node: the session's part " << fragment << " is placed in the map; "
+                                                     << frames.size()
+                                                     << " held keyframe(s) mapped");
+  PublishTrajectory();
 }
 
 void MapNode::Impl::MapFrame(RgbdFrame frame, const ros::Time& stamp,

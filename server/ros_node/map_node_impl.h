@@ -67,9 +67,21 @@ struct MapNode::Impl {
                 std::optional<std::vector<Detection>> detections);
   /// ~pose_source estimate: tracks `frame` (giving it its pose), publishes the pose on TF as
   /// world_frame -> `camera_frame`, and moves the mapped keyframes when it closes a loop. False
-  /// with the reason when the frame cannot be tracked.
+  /// with the reason when the frame cannot be tracked. A frame tracked in a provisional part of
+  /// the session (not placed in the map yet) is tracked: TakeFrame holds it.
   bool TrackFrame(RgbdFrame* frame, const ros::Time& stamp, const std::string& camera_frame,
                   std::string* why);
+  /// A frame with its pose (and detections) on its way to the map: held while its part of the
+  /// session is provisional, mapped otherwise, after the held keyframes of a part it placed.
+  void TakeFrame(RgbdFrame frame, const ros::Time& stamp,
+                 std::optional<std::vector<Detection>> detections);
+  /// Holds a keyframe of the provisional part `last_tracking` tracked it in (keyframe selection
+  /// within the part's own frame), dropping the oldest beyond server.max_held_keyframes.
+  void HoldFrame(RgbdFrame frame, const ros::Time& stamp,
+                 std::optional<std::vector<Detection>> detections);
+  /// Maps the keyframes held in provisional part `fragment`, in order, at their poses in the
+  /// map now that it is placed.
+  void MapHeldFrames(int fragment);
   /// Starts tracking at the newest stored keyframe (a restart on an existing map).
   void ResumeTracking();
   /// The mapped keyframes' current poses as nav_msgs/Path on ~trajectory.
@@ -138,6 +150,20 @@ struct MapNode::Impl {
   TrackedKeyframes tracked_keyframes;
   std::map<KeyframeId, ros::Time> keyframe_stamps;
   std::optional<TrackingReport> last_tracking;  // of the frame MapFrame is about to map
+  // Keyframes of provisional parts of the session, by part, in order: each where it lies on an
+  // odometry keyframe of its part, which moves into the map's frame when the part is placed.
+  struct HeldFrame {
+    RgbdFrame frame;
+    ros::Time stamp;
+    std::optional<std::vector<Detection>> detections;
+    int odometry_keyframe = -1;
+    Eigen::Isometry3d T_K_C = Eigen::Isometry3d::Identity();
+  };
+  std::map<int, std::vector<HeldFrame>> held_frames;
+  std::size_t held_count = 0;
+  // Keyframe selection within the current provisional part (its poses are in its own frame).
+  std::optional<KeyframeSelector> part_keyframe_selector;
+  int part_of_selector = 0;
   std::string tracking_blocked;                 // why tracking cannot resume (empty: it can)
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster;
   ros::Publisher trajectory_pub;
@@ -149,6 +175,8 @@ struct MapNode::Impl {
   std::atomic<long long> frames_received{0};
   std::atomic<long long> frames_rejected{0};
   std::atomic<long long> keyframes_sent{0};
+  std::atomic<long long> keyframes_held{0};      // held now, in parts not placed yet
+  std::atomic<long long> keyframes_attached{0};  // held, then mapped when their part was placed
   mutable std::mutex rejection_mutex;
   std::string last_rejection;
 

@@ -274,6 +274,8 @@ bool MapNode::Impl::Status(objmap_msgs::Status::Request& /*request*/,
   response.frames_received = frames_received;
   response.frames_rejected = frames_rejected;
   response.keyframes_sent = keyframes_sent;
+  response.keyframes_held = keyframes_held;
+  response.keyframes_attached = keyframes_attached;
   {
     std::lock_guard<std::mutex> lock(rejection_mutex);
     response.last_rejection = last_rejection;

@@ -181,6 +181,91 @@ TEST_F(RosNodeCamera, EstimatesThePosesOfARecordingAndPublishesThemOnTfAndAsAPat
   EXPECT_EQ(node->Stop(SIGINT), 0) << node->Log();
 }
 
+// Two sessions of ~pose_source estimate on one database. The second starts where the first's
+// views do not reach (redkitchen frames 640 back to 540 after a map of frames 250-350): its first
+// keyframes are tracked in a provisional part of the session and held, not rejected; the frame
+// that places the part maps them at their poses in the map, then itself.
+TEST_F(RosNodeCamera, ASessionStartingOffTheMappedViewsIsHeldThenMappedOncePlaced) {
+  const std::string folder = testing::SharedDataPath("redkitchen");
+  OBJMAP_REQUIRE_PATH(folder);
+  std::string why;
+  const auto reader = OpenSequence(folder, &why);
+  ASSERT_NE(reader, nullptr) << why;
+  auto record = [&](const std::vector<std::size_t>& indices, const std::string& name,
+                    std::vector<Eigen::Isometry3d>* reference) {
+    std::vector<RgbdFrame> frames;
+    for (const std::size_t index : indices) {
+      RgbdFrame frame;
+      EXPECT_TRUE(reader->ReadFrame(index, &frame, &why)) << why;
+      reference->push_back(frame.T_W_C);
+      frames.push_back(std::move(frame));
+    }
+    const std::string path = (dir() / name).string();
+    EXPECT_TRUE(testing::WriteOniFile(path, testing::RecordingOf(frames, 66667)));
+    return path;
+  };
+  std::vector<std::size_t> first_indices, second_indices;
+  for (std::size_t index = 250; index <= 350; index += 5) first_indices.push_back(index);
+  for (std::size_t index = 640; index >= 540; index -= 10) second_indices.push_back(index);
+  std::vector<Eigen::Isometry3d> first_reference, second_reference;
+  const std::string first = record(first_indices, "parts_1.oni", &first_reference);
+  const std::string second = record(second_indices, "parts_2.oni", &second_reference);
+  const auto first_count = static_cast<long long>(first_indices.size());
+  const auto second_count = static_cast<long long>(second_indices.size());
+
+  // Runs the node on `path` until every frame is read and mapped or refused; its last status.
+  auto run = [&](const std::string& path, long long frames, long long keyframes_before,
+                 std::unique_ptr<ChildProcess>* node) {
+    *node = StartNode("objmap_node_parts",
+                      {"_openni2/oni_path:=" + path, "_pose_source:=estimate",
+                       "_camera_frame:=kitchen_camera", "_keyframes/every_nth_frame:=1"});
+    EXPECT_TRUE(WaitForService("/objmap_node_parts/status", node->get())) << (*node)->Log();
+    objmap_msgs::Status status;
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(300);
+    while (ros::service::call("/objmap_node_parts/status", status) &&
+           (status.response.frames_received < frames ||
+            status.response.keyframes - keyframes_before + status.response.frames_rejected +
+                    status.response.keyframes_held <
+                frames) &&
+           std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    return status.response;
+  };
+  std::unique_ptr<ChildProcess> node;
+  const auto first_status = run(first, first_count, 0, &node);
+  ASSERT_EQ(first_status.keyframes, first_count) << first_status.last_rejection << node->Log();
+  EXPECT_EQ(first_status.keyframes_attached, 0);
+  EXPECT_EQ(node->Stop(SIGINT), 0) << node->Log();
+
+  const auto second_status = run(second, second_count, first_count, &node);
+  EXPECT_EQ(second_status.frames_received, second_count) << node->Log();
+  EXPECT_EQ(second_status.frames_rejected, 0) << second_status.last_rejection;
+  EXPECT_EQ(second_status.keyframes_held, 0) << "a part never placed: " << node->Log();
+  ASSERT_GT(second_status.keyframes_attached, 0)
+      << "frame 640 was placed at once: the test needs a start off the map";
+  EXPECT_EQ(second_status.keyframes, first_count + second_count) << node->Log();
+
+  // Every keyframe of the second session, the held ones included, at its pose in the map (whose
+  // origin is the first session's first camera).
+  const auto trajectory = ros::topic::waitForMessage<nav_msgs::Path>(
+      "/objmap_node_parts/trajectory", ros::Duration(10.0));
+  ASSERT_TRUE(trajectory);
+  ASSERT_EQ(trajectory->poses.size(), second_indices.size());
+  for (std::size_t n = 0; n < second_indices.size(); ++n) {
+    Eigen::Isometry3d keyframe;
+    ASSERT_TRUE(ros_bridge::PoseFromMsg(trajectory->poses[n].pose, "path", &keyframe, &why));
+    const Eigen::Isometry3d truth = first_reference.front().inverse() * second_reference[n];
+    const Eigen::Isometry3d error = truth.inverse() * keyframe;
+    EXPECT_LT(error.translation().norm(), 0.05) << "frame " << second_indices[n];
+    EXPECT_LT(Eigen::AngleAxisd(error.linear()).angle(), 3.0 * M_PI / 180.0)
+        << "frame " << second_indices[n];
+  }
+  EXPECT_EQ(node->Stop(SIGINT), 0) << node->Log();
+  // The node's output reaches its log once it stops.
+  EXPECT_NE(node->Log().find("held keyframe(s) mapped"), std::string::npos) << node->Log();
+}
+
 // launch/objmap_openni2.launch with a recording and a static camera serves the map it makes.
 TEST_F(RosNodeCamera, OpenNI2LaunchPlaysARecording) {
   const std::string path = (dir() / "launched.oni").string();
