@@ -485,5 +485,30 @@ TEST(DetectChangesPairing, TheArrivalOnlyAMoveExplainsIsTheMove) {
   EXPECT_EQ(changes.histories.at(on_the_table).state, ObjectState::kPresent);
 }
 
+// A chair whose model took in the table edge it stood at (bounds three times its width) moves
+// to a place where it stands alone: one chair, one colour, moved. A cup and a thing of its label
+// and colour five times its size are not one object.
+TEST(DetectChangesPairing, SizeRulesOutOnlyTheAbsurdPairs) {
+  auto changes_of = [](int label, float gone_spacing, float arrival_spacing) {
+    GivenScene scene(6);
+    const ObjectId gone = scene.AddObject(label, 0.8f, 0.f, gone_spacing, {90, 60, 30}, 1, 3);
+    const ObjectId arrival = scene.AddObject(label, 0.8f, 3.f, arrival_spacing, {90, 60, 30}, 4, 6);
+    for (KeyframeId keyframe = 1; keyframe <= 6; ++keyframe) {
+      const bool first_visit = keyframe <= 3;
+      scene.See(gone, keyframe, first_visit ? 0.f : 0.9f);
+      scene.See(arrival, keyframe, first_visit ? 0.9f : 0.f);
+    }
+    return std::make_pair(gone, scene.Changes(ChangeConfig{}));
+  };
+  const auto [chair, chair_changes] = changes_of(CocoClassId("chair"), 0.03f, 0.01f);
+  ASSERT_EQ(chair_changes.histories.count(chair), 1u);
+  EXPECT_EQ(chair_changes.histories.at(chair).state, ObjectState::kMoved);
+  EXPECT_EQ(chair_changes.histories.at(chair).places.size(), 2u);
+  const auto [cup, cup_changes] = changes_of(CocoClassId("cup"), 0.002f, 0.011f);
+  ASSERT_EQ(cup_changes.histories.count(cup), 1u);
+  EXPECT_EQ(cup_changes.histories.at(cup).state, ObjectState::kRemoved);
+  EXPECT_EQ(cup_changes.histories.size(), 2u);  // and the big thing added
+}
+
 }  // namespace
 }  // namespace objmap
