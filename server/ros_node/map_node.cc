@@ -378,54 +378,31 @@ void MapNode::Impl::HoldFrame(RgbdFrame frame, const ros::Time& stamp,
     return Reject(stamp, "not placed in the map yet (" + report.why +
                              "), and server.max_held_keyframes is 0: not held");
   }
-  HeldFrame held;
-  held.frame = std::move(frame);
-  held.stamp = stamp;
-  held.detections = std::move(detections);
-  held.odometry_keyframe = report.reference_keyframe;
-  held.T_K_C = odometry->KeyframePose(report.reference_keyframe).inverse() * report.T_W_C;
-  held_frames[report.fragment].push_back(std::move(held));
-  ++held_count;
-  while (held_count > limit && !held_frames.empty()) {
-    // The oldest part's first keyframe goes: a part that long unplaced is the least likely to
-    // be placed.
-    auto oldest = held_frames.begin();
-    Reject(oldest->second.front().stamp,
-           "held " + std::to_string(limit) +
-               " keyframes of parts of the session not placed in the map (server."
-               "max_held_keyframes): the oldest is dropped");
-    oldest->second.erase(oldest->second.begin());
-    --held_count;
-    if (oldest->second.empty()) held_frames.erase(oldest);
+  const auto dropped =
+      held_frames.Hold({std::move(frame), stamp, std::move(detections)}, report, *odometry, limit);
+  for (const auto& held : dropped) {
+    // The oldest part's first keyframes go: a part that long unplaced is the least likely to be
+    // placed.
+    Reject(held.payload.stamp, "held " + std::to_string(limit) +
+                                   " keyframes of parts of the session not placed in the map "
+                                   "(server.max_held_keyframes): the oldest is dropped");
   }
-  keyframes_held = static_cast<long long>(held_count);
+  keyframes_held = static_cast<long long>(held_frames.size());
   ROS_INFO_STREAM_THROTTLE(5.0, "objmap_node: not placed in the map yet ("
-                                    << report.why << "); " << held_count
+                                    << report.why << "); " << held_frames.size()
                                     << " keyframe(s) held until the session's part is placed");
 }
 
 void MapNode::Impl::MapHeldFrames(int fragment) {
-  const auto found = held_frames.find(fragment);
-  if (found == held_frames.end()) return;
-  std::vector<HeldFrame> frames = std::move(found->second);
-  held_frames.erase(found);
-  held_count -= frames.size();
-  keyframes_held = static_cast<long long>(held_count);
-  for (HeldFrame& held : frames) {
-    held.frame.T_W_C = odometry->KeyframePose(held.odometry_keyframe) * held.T_K_C;
-    AddKeyframeOutcome outcome;
-    const ServiceStatus status =
-        server->AddKeyframe(std::move(held.frame), std::move(held.detections), &outcome);
-    if (!status.ok()) {
-      Reject(held.stamp, "a held keyframe of the part just placed was refused by the map server: " +
-                             status.message);
-      continue;
+  auto frames = held_frames.Take(fragment);
+  if (frames.empty()) return;
+  keyframes_held = static_cast<long long>(held_frames.size());
+  for (auto& held : frames) {
+    held.payload.frame.T_W_C = held.T_W_C(*odometry);
+    if (SendKeyframe(std::move(held.payload.frame), held.payload.stamp,
+                     std::move(held.payload.detections), held.odometry_keyframe, held.T_K_C)) {
+      ++keyframes_attached;
     }
-    ++keyframes_sent;
-    ++keyframes_attached;
-    if (outcome.keyframe_id == 0) continue;  // kept as a revisit of a stored view
-    tracked_keyframes.AddRelative(outcome.keyframe_id, held.odometry_keyframe, held.T_K_C);
-    keyframe_stamps[outcome.keyframe_id] = held.stamp;
   }
   ROS_INFO_STREAM("objmap_node: the session's part " << fragment << " is placed in the map; "
                                                      << frames.size()
@@ -436,19 +413,36 @@ void MapNode::Impl::MapHeldFrames(int fragment) {
 void MapNode::Impl::MapFrame(RgbdFrame frame, const ros::Time& stamp,
                              std::optional<std::vector<Detection>> detections) {
   if (!keyframe_selector.IsKeyframe(frame.T_W_C)) return;
+  const bool tracked = config.estimates_poses() && last_tracking;
+  const int odometry_keyframe = tracked ? last_tracking->reference_keyframe : -1;
+  const Eigen::Isometry3d T_K_C =
+      tracked ? odometry->KeyframePose(odometry_keyframe).inverse() * last_tracking->T_W_C
+              : Eigen::Isometry3d::Identity();
+  if (SendKeyframe(std::move(frame), stamp, std::move(detections), odometry_keyframe, T_K_C) &&
+      tracked) {
+    PublishTrajectory();
+  }
+}
+
+bool MapNode::Impl::SendKeyframe(RgbdFrame frame, const ros::Time& stamp,
+                                 std::optional<std::vector<Detection>> detections,
+                                 int odometry_keyframe, const Eigen::Isometry3d& T_K_C) {
   AddKeyframeOutcome outcome;
   const ServiceStatus status =
       server->AddKeyframe(std::move(frame), std::move(detections), &outcome);
-  if (!status.ok()) return Reject(stamp, "the map server refused it: " + status.message);
+  if (!status.ok()) {
+    Reject(stamp, "the map server refused it: " + status.message);
+    return false;
+  }
   ++keyframes_sent;
   // A keyframe kept as a revisit of a stored view (thinning) is no keyframe of the map.
-  if (config.estimates_poses() && last_tracking && outcome.keyframe_id != 0) {
-    tracked_keyframes.Add(outcome.keyframe_id, *last_tracking, *odometry);
+  if (odometry_keyframe >= 0 && outcome.keyframe_id != 0) {
+    tracked_keyframes.AddRelative(outcome.keyframe_id, odometry_keyframe, T_K_C);
     keyframe_stamps[outcome.keyframe_id] = stamp;
-    PublishTrajectory();
   }
   ROS_DEBUG_STREAM("objmap_node: keyframe " << outcome.keyframe_id << " from t=" << StampText(stamp)
                                             << ", map version " << outcome.map_version);
+  return true;
 }
 
 }  // namespace objmap::ros_node

@@ -36,6 +36,7 @@
 #include "dataset/keyframe_selector.h"
 #include "map_node.h"
 #include "map_server/map_server.h"
+#include "odometry/held_keyframes.h"
 #include "odometry/tracked_keyframes.h"
 
 namespace objmap::ros_node {
@@ -82,6 +83,12 @@ struct MapNode::Impl {
   /// Maps the keyframes held in provisional part `fragment`, in order, at their poses in the
   /// map now that it is placed.
   void MapHeldFrames(int fragment);
+  /// Sends a keyframe with its pose to the map server; with estimated poses, `T_K_C` on odometry
+  /// keyframe `odometry_keyframe` (>= 0) is where it lies, which later loop closures move. False,
+  /// counted as rejected, when the server refuses it.
+  bool SendKeyframe(RgbdFrame frame, const ros::Time& stamp,
+                    std::optional<std::vector<Detection>> detections, int odometry_keyframe,
+                    const Eigen::Isometry3d& T_K_C);
   /// Starts tracking at the newest stored keyframe (a restart on an existing map).
   void ResumeTracking();
   /// The mapped keyframes' current poses as nav_msgs/Path on ~trajectory.
@@ -150,17 +157,13 @@ struct MapNode::Impl {
   TrackedKeyframes tracked_keyframes;
   std::map<KeyframeId, ros::Time> keyframe_stamps;
   std::optional<TrackingReport> last_tracking;  // of the frame MapFrame is about to map
-  // Keyframes of provisional parts of the session, by part, in order: each where it lies on an
-  // odometry keyframe of its part, which moves into the map's frame when the part is placed.
-  struct HeldFrame {
+  // Keyframes of provisional parts of the session, held until their part is placed.
+  struct PendingFrame {
     RgbdFrame frame;
     ros::Time stamp;
     std::optional<std::vector<Detection>> detections;
-    int odometry_keyframe = -1;
-    Eigen::Isometry3d T_K_C = Eigen::Isometry3d::Identity();
   };
-  std::map<int, std::vector<HeldFrame>> held_frames;
-  std::size_t held_count = 0;
+  HeldKeyframes<PendingFrame> held_frames;
   // Keyframe selection within the current provisional part (its poses are in its own frame).
   std::optional<KeyframeSelector> part_keyframe_selector;
   int part_of_selector = 0;

@@ -13,9 +13,10 @@
 #include <thread>
 
 #include "map_server/map_server.h"
-#include "odometry/tracked_keyframes.h"
-#include "map_server/task_threads.h"
 #include "map_server/snapshot_builder.h"
+#include "map_server/task_threads.h"
+#include "odometry/held_keyframes.h"
+#include "odometry/tracked_keyframes.h"
 
 namespace objmap {
 
@@ -69,18 +70,8 @@ struct MapServer::Impl {
   TrackedKeyframes tracked_keyframes;
   std::string tracking_blocked;  // why tracking cannot resume on the stored map (empty: it can)
   // Keyframes tracked in a provisional fragment (kProvisional), detected and waiting to be
-  // mapped when their fragment is placed: the job (frame, detections, session) and where the
-  // frame lies on the odometry keyframe it was tracked against.
-  struct HeldKeyframe {
-    std::shared_ptr<MapJob> job;
-    int odometry_keyframe = -1;
-    Eigen::Isometry3d T_K_C = Eigen::Isometry3d::Identity();
-  };
-  std::map<int, std::vector<HeldKeyframe>> held_keyframes;  // by fragment, in order
-  std::size_t held_count = 0;
-  /// Holds `job` of a keyframe tracked in a provisional fragment, dropping the oldest held when
-  /// there are more than max_held_keyframes. Returns how many its fragment holds.
-  std::size_t Hold(std::shared_ptr<MapJob> job, const TrackingReport& tracked);
+  // mapped when their fragment is placed: the job (frame, detections, session).
+  HeldKeyframes<std::shared_ptr<MapJob>> held_keyframes;
   /// Maps the keyframes held in `fragment`, just placed (tracking_mutex held), in order, at the
   /// poses their odometry keyframes now have; their ids into `mapped`.
   ServiceStatus MapHeld(int fragment, std::vector<KeyframeId>* mapped);

@@ -100,8 +100,7 @@ void MapServer::Impl::BeginSessionTracking(const MapServer& server) {
     odometry = std::make_unique<RgbdOdometry>(config.odometry);
     tracked_keyframes = TrackedKeyframes{};
     // Held keyframes lie on the old odometry's keyframes: a new session cannot place them.
-    held_keyframes.clear();
-    held_count = 0;
+    held_keyframes.Clear();
     tracker = odometry.get();
   } else if (config.pose_source == PoseSource::kSessionFrame) {
     T_map_session.reset();

@@ -88,7 +88,9 @@ ServiceStatus MapServer::AddKeyframe(RgbdFrame frame,
     job->session = impl_->session;
   }
   if (impl_->odometry && tracked.status == TrackingStatus::kProvisional) {
-    const std::size_t held = impl_->Hold(job, tracked);
+    (void)impl_->held_keyframes.Hold(job, tracked, *impl_->odometry,
+                                     static_cast<std::size_t>(impl_->config.max_held_keyframes));
+    const std::size_t held = impl_->held_keyframes.In(tracked.fragment);
     *outcome = AddKeyframeOutcome{};
     outcome->untracked = true;
     outcome->held = true;
@@ -136,44 +138,19 @@ ServiceStatus MapServer::AddKeyframe(RgbdFrame frame,
   return result.status;
 }
 
-std::size_t MapServer::Impl::Hold(std::shared_ptr<MapJob> job, const TrackingReport& tracked) {
-  HeldKeyframe held;
-  held.job = std::move(job);
-  held.odometry_keyframe = tracked.reference_keyframe;
-  held.T_K_C = odometry->KeyframePose(tracked.reference_keyframe).inverse() * tracked.T_W_C;
-  held_keyframes[tracked.fragment].push_back(std::move(held));
-  ++held_count;
-  // Beyond the bound, the oldest part's oldest keyframe goes: memory stays bounded on a session
-  // that never overlaps the map.
-  while (held_count > static_cast<std::size_t>(config.max_held_keyframes) &&
-         !held_keyframes.empty()) {
-    auto oldest = held_keyframes.begin();
-    oldest->second.erase(oldest->second.begin());
-    --held_count;
-    if (oldest->second.empty()) held_keyframes.erase(oldest);
-  }
-  const auto fragment = held_keyframes.find(tracked.fragment);
-  return fragment == held_keyframes.end() ? 0 : fragment->second.size();
-}
-
 ServiceStatus MapServer::Impl::MapHeld(int fragment, std::vector<KeyframeId>* mapped) {
-  const auto found = held_keyframes.find(fragment);
-  if (found == held_keyframes.end()) return ServiceStatus::Ok();
-  std::vector<HeldKeyframe> keyframes = std::move(found->second);
-  held_keyframes.erase(found);
-  held_count -= keyframes.size();
-  for (HeldKeyframe& held : keyframes) {
+  for (auto& held : held_keyframes.Take(fragment)) {
     // The fragment now lies in the map's frame: each keyframe where its odometry keyframe went.
-    held.job->frame.T_W_C = odometry->KeyframePose(held.odometry_keyframe) * held.T_K_C;
-    const std::shared_future<MapJob::Result> done = held.job->result;
-    const ServiceStatus queued = Enqueue(held.job, /*bounded=*/true);
+    held.payload->frame.T_W_C = held.T_W_C(*odometry);
+    const std::shared_future<MapJob::Result> done = held.payload->result;
+    const ServiceStatus queued = Enqueue(held.payload, /*bounded=*/true);
     if (!queued.ok()) {
       return {queued.code, "the held keyframes of the part just placed: " + queued.message};
     }
     const MapJob::Result result = done.get();
     if (!result.status.ok()) {
       return {result.status.code, "a held keyframe of the part just placed (" +
-                                      held.job->frame.name + "): " + result.status.message};
+                                      held.payload->frame.name + "): " + result.status.message};
     }
     if (result.keyframe.keyframe_id == 0) continue;  // kept as a revisit only
     tracked_keyframes.AddRelative(result.keyframe.keyframe_id, held.odometry_keyframe, held.T_K_C);
