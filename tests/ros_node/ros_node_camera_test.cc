@@ -45,6 +45,26 @@ class RosNodeCamera : public testing::RosFixture {
     EXPECT_TRUE(node->Start(&why)) << why;
     return node;
   }
+
+  // Writes frames `indices` of `reader` as an .oni recording `name` in the test's folder (15
+  // frames a second); their poses into `reference`. Its path, or empty with the reason.
+  static std::string Record(const SequenceReader& reader, const std::vector<std::size_t>& indices,
+                            const std::string& name, std::vector<Eigen::Isometry3d>* reference,
+                            std::string* why) {
+    std::vector<RgbdFrame> frames;
+    for (const std::size_t index : indices) {
+      RgbdFrame frame;
+      if (!reader.ReadFrame(index, &frame, why)) return "";
+      reference->push_back(frame.T_W_C);
+      frames.push_back(std::move(frame));
+    }
+    const std::string path = (dir() / name).string();
+    if (!testing::WriteOniFile(path, testing::RecordingOf(frames, 66667))) {
+      *why = path + ": not written";
+      return "";
+    }
+    return path;
+  }
 };
 
 TEST_F(RosNodeCamera, WithoutACameraTheNodeSaysSoAndExits) {
@@ -126,17 +146,11 @@ TEST_F(RosNodeCamera, EstimatesThePosesOfARecordingAndPublishesThemOnTfAndAsAPat
   const auto reader = OpenSequence(folder, &why);
   ASSERT_NE(reader, nullptr) << why;
   constexpr int kFrames = 20;
-  std::vector<RgbdFrame> frames;
+  std::vector<std::size_t> indices;
+  for (int n = 0; n < kFrames; ++n) indices.push_back(static_cast<std::size_t>(2 * n));
   std::vector<Eigen::Isometry3d> reference;
-  for (int n = 0; n < kFrames; ++n) {
-    RgbdFrame frame;
-    ASSERT_TRUE(reader->ReadFrame(static_cast<std::size_t>(2 * n), &frame, &why)) << why;
-    reference.push_back(frame.T_W_C);
-    frames.push_back(std::move(frame));
-  }
-  const testing::OniTestRecording recording = testing::RecordingOf(frames, 66667);
-  const std::string path = (dir() / "kitchen.oni").string();
-  ASSERT_TRUE(testing::WriteOniFile(path, recording));
+  const std::string path = Record(*reader, indices, "kitchen.oni", &reference, &why);
+  ASSERT_FALSE(path.empty()) << why;
 
   tf2_ros::Buffer tf_buffer;
   tf2_ros::TransformListener tf_listener(tf_buffer);  // before the node publishes
@@ -191,25 +205,15 @@ TEST_F(RosNodeCamera, ASessionStartingOffTheMappedViewsIsHeldThenMappedOncePlace
   std::string why;
   const auto reader = OpenSequence(folder, &why);
   ASSERT_NE(reader, nullptr) << why;
-  auto record = [&](const std::vector<std::size_t>& indices, const std::string& name,
-                    std::vector<Eigen::Isometry3d>* reference) {
-    std::vector<RgbdFrame> frames;
-    for (const std::size_t index : indices) {
-      RgbdFrame frame;
-      EXPECT_TRUE(reader->ReadFrame(index, &frame, &why)) << why;
-      reference->push_back(frame.T_W_C);
-      frames.push_back(std::move(frame));
-    }
-    const std::string path = (dir() / name).string();
-    EXPECT_TRUE(testing::WriteOniFile(path, testing::RecordingOf(frames, 66667)));
-    return path;
-  };
   std::vector<std::size_t> first_indices, second_indices;
   for (std::size_t index = 250; index <= 350; index += 5) first_indices.push_back(index);
   for (std::size_t index = 640; index >= 540; index -= 10) second_indices.push_back(index);
   std::vector<Eigen::Isometry3d> first_reference, second_reference;
-  const std::string first = record(first_indices, "parts_1.oni", &first_reference);
-  const std::string second = record(second_indices, "parts_2.oni", &second_reference);
+  const std::string first = Record(*reader, first_indices, "parts_1.oni", &first_reference, &why);
+  ASSERT_FALSE(first.empty()) << why;
+  const std::string second =
+      Record(*reader, second_indices, "parts_2.oni", &second_reference, &why);
+  ASSERT_FALSE(second.empty()) << why;
   const auto first_count = static_cast<long long>(first_indices.size());
   const auto second_count = static_cast<long long>(second_indices.size());
 
