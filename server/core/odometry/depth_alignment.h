@@ -24,7 +24,9 @@ struct DepthGrid {
 };
 
 /// Cells with fewer than half their pixels valid (depth in (0, max_depth_m]) or whose depths
-/// spread over more than 1 cm + 2 % (a depth edge inside the cell) have no point.
+/// spread over more than 1 cm + 2 % (a depth edge inside the cell) have no point, unless the
+/// middle 80 % of their depths keep within that (sensor noise, a rim of another surface): then
+/// the point is at the mean of those middle depths.
 [[nodiscard]] DepthGrid MakeDepthGrid(const DepthImage& depth, const CameraIntrinsics& intrinsics,
                                       int step, double max_depth_m);
 
