@@ -64,6 +64,10 @@ DepthGrid MakeDepthGrid(const DepthImage& depth, const CameraIntrinsics& intrins
   g.cy = (intrinsics.cy - (step - 1) * 0.5) / step;
   g.points.assign(static_cast<std::size_t>(g.width) * g.height, Eigen::Vector3f(kNaN, kNaN, kNaN));
   const float far = static_cast<float>(max_depth_m);
+  // Depths within 1 cm + 2 % of the nearest are one surface; beyond, a depth edge.
+  auto one_surface = [](float nearest, float farthest) {
+    return farthest - nearest <= 0.01f + 0.02f * nearest;
+  };
   std::vector<float> cell;
   cell.reserve(static_cast<std::size_t>(step) * step);
   for (int y = 0; y < g.height; ++y) {
@@ -83,7 +87,7 @@ DepthGrid MakeDepthGrid(const DepthImage& depth, const CameraIntrinsics& intrins
       }
       if (2 * cell.size() < static_cast<std::size_t>(step) * step) continue;
       float z = sum / static_cast<float>(cell.size());
-      if (farthest - nearest > 0.01f + 0.02f * nearest) {
+      if (!one_surface(nearest, farthest)) {
         // Then the middle 80 % of the depths decide: the extremes of a cell's 16-64 samples are
         // the sensor's noise (a structured-light sensor's sigma at 3 m is about 1.5 cm, the
         // range of 64 such samples about 5 sigma: the whole range dropped most cells beyond
@@ -93,7 +97,7 @@ DepthGrid MakeDepthGrid(const DepthImage& depth, const CameraIntrinsics& intrins
         const auto high = cell.end() - 1 - static_cast<std::ptrdiff_t>(trim);
         std::nth_element(cell.begin(), low, cell.end());
         std::nth_element(low + 1, high, cell.end());
-        if (*high - *low > 0.01f + 0.02f * *low) continue;
+        if (!one_surface(*low, *high)) continue;
         // Between low and high lie the middle depths (nth_element's partitions).
         z = std::accumulate(low, high + 1, 0.f) / static_cast<float>(high - low + 1);
       }
