@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <nlohmann/json.hpp>
+#include <set>
 
 #include "mapper/map_export.h"
 #include "mapper/mapper.h"
@@ -508,6 +509,64 @@ TEST(DetectChangesPairing, SizeRulesOutOnlyTheAbsurdPairs) {
   ASSERT_EQ(cup_changes.histories.count(cup), 1u);
   EXPECT_EQ(cup_changes.histories.at(cup).state, ObjectState::kRemoved);
   EXPECT_EQ(cup_changes.histories.size(), 2u);  // and the big thing added
+}
+
+// A pile of two books, modelled as the whole pile and the top book alone. Between two sessions
+// the top book goes; the book below is still detected, and its detections join the pile's
+// object, which the second session then looks through a third of (where the top book was).
+class DetectChangesOfAPile : public ::testing::Test {
+ protected:
+  // Session 1: keyframes 1-4 detect both; session 2: keyframes 5-8 detect the pile's object and
+  // see through `pile_empty` of it and `top_empty` of the top book's model.
+  ObjectChanges Changes(float pile_empty, float top_empty, bool with_top = true) {
+    GivenScene scene(8);
+    const int book = CocoClassId("book");
+    pile_ = scene.AddObject(book, 0.7f, 0.f, 0.006f, {120, 40, 40}, 1, 8);
+    top_ = with_top ? scene.AddObject(book, 0.7f, 0.02f, 0.005f, {120, 40, 40}, 1, 4) : 0;
+    for (KeyframeId keyframe = 1; keyframe <= 8; ++keyframe) {
+      const bool first_visit = keyframe <= 4;
+      scene.See(pile_, keyframe, first_visit ? 0.02f : pile_empty);
+      if (with_top) scene.See(top_, keyframe, first_visit ? 0.f : top_empty);
+    }
+    scene.StartSession(5, 2);
+    return scene.Changes(ChangeConfig{});
+  }
+
+  ObjectId pile_ = 0, top_ = 0;
+};
+
+TEST_F(DetectChangesOfAPile, TheTopTakenAwayIsRemovedWhileTheRestIsStillDetected) {
+  const ObjectChanges changes = Changes(0.35f, 0.08f);
+  ASSERT_EQ(changes.histories.count(top_), 1u);
+  const ObjectHistory& history = changes.histories.at(top_);
+  EXPECT_EQ(history.state, ObjectState::kRemoved);
+  ASSERT_EQ(history.places.size(), 1u);
+  EXPECT_EQ(history.places[0].seen_empty_at, 6);  // the second view of session 2
+  EXPECT_EQ(history.places[0].last_seen, 4);
+  EXPECT_EQ(changes.gone, std::set<ObjectId>{top_});
+  EXPECT_EQ(changes.histories.count(pile_), 0u);
+}
+
+TEST_F(DetectChangesOfAPile, APileSeenAsBeforeHasNoChange) {
+  const ObjectChanges changes = Changes(0.03f, 0.f);
+  EXPECT_TRUE(changes.histories.empty());
+  EXPECT_TRUE(changes.gone.empty());
+}
+
+TEST_F(DetectChangesOfAPile, OneObjectStillDetectedIsNoRemovalWhateverASessionSeesThrough) {
+  // Nothing else stood there: the session sees the thing from another side, or its model took
+  // in its surroundings; which part went, if any, is not known.
+  const ObjectChanges changes = Changes(0.35f, 0.f, /*with_top=*/false);
+  EXPECT_TRUE(changes.histories.empty());
+  EXPECT_TRUE(changes.gone.empty());
+}
+
+TEST_F(DetectChangesOfAPile, TheTopsOwnModelSeenEmptyIsTheOnlyChange) {
+  const ObjectChanges changes = Changes(0.35f, 0.9f);
+  EXPECT_EQ(changes.gone, std::set<ObjectId>{top_});
+  ASSERT_EQ(changes.histories.size(), 1u);
+  EXPECT_EQ(changes.histories.at(top_).state, ObjectState::kRemoved);
+  EXPECT_EQ(changes.histories.at(top_).places[0].seen_empty_at, 6);
 }
 
 }  // namespace

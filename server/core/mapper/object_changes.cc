@@ -7,116 +7,11 @@
 #include <limits>
 #include <tuple>
 
+#include "mapper/place_evidence.h"
 #include "types/coco_classes.h"
 
 namespace objmap {
 namespace {
-
-constexpr KeyframeId kMaxKeyframeId = std::numeric_limits<KeyframeId>::max();
-
-// What the keyframes said of one object's place.
-struct PlaceEvidence {
-  const MapObject* object = nullptr;
-  KeyframeId first_seen = 0, last_seen = 0;
-  KeyframeId seen_empty_at = 0;    // see ObjectPlace
-  bool seen_empty_before = false;  // min_empty_views saw the place empty before first_seen
-  bool judged_before = false;      // some keyframe before first_seen could judge the place
-  bool counts = false;             // confirmed (as of its last sighting, when gone)
-};
-
-// A view clearly saw the object there: its place in view, and at most half the share of
-// see-through points that would call it empty.
-bool SawItThere(const ObjectVisibility& seen, float empty_fraction, const ChangeConfig& config) {
-  return CouldJudgePlace(seen, config) && seen.empty_fraction < 0.5f * empty_fraction;
-}
-
-// A view saw the object's place empty: it judged the place and saw through at least
-// `empty_fraction` of the object's points in view.
-bool SawPlaceEmpty(const ObjectVisibility& seen, float empty_fraction, const ChangeConfig& config) {
-  return CouldJudgePlace(seen, config) && seen.empty_fraction >= empty_fraction;
-}
-
-// The share of its points in view that a view must see through to see an object's place empty.
-struct EmptyFractions {
-  float within_session = 0.f;    // in a session that detected it there
-  float between_sessions = 0.f;  // in another session
-};
-
-// An object's baseline is what the views which detected it there saw through (their 90th
-// percentile, plus min_empty_fraction_over_present): a view that sees through clearly more saw
-// the place empty. A keyboard or a mug whose model took in a rim of the desk around it keeps
-// that rim in view when it is taken away, and a view sees through only 40 % of it; while it was
-// there, views saw through 2-6 %. A chair is seen through between its legs and the bars of its
-// back while it stands there, 40-60 % from some sides: those views are not empty. Between
-// sessions the baseline decides (objects are put down and taken away between visits). Within a
-// session that detected the object it must also reach min_empty_fraction: an object taken away
-// while the camera still looks is rare, and a bare baseline of a few views would call the
-// noisier views of a static scene empty. Without a baseline: min_empty_fraction.
-EmptyFractions EmptyFractionsOf(const std::map<KeyframeId, ObjectVisibility>& visibility,
-                                const std::set<KeyframeId>& observed, const ChangeConfig& config) {
-  // Fewer views that detected it and judged its place: no baseline to speak of.
-  constexpr std::size_t kMinPresentViews = 3;
-  const EmptyFractions no_baseline{config.min_empty_fraction, config.min_empty_fraction};
-  if (!(config.min_empty_fraction_over_present > 0.f)) return no_baseline;
-  std::vector<float> present;
-  for (const KeyframeId keyframe : observed) {
-    const auto it = visibility.find(keyframe);
-    if (it != visibility.end() && CouldJudgePlace(it->second, config)) {
-      present.push_back(it->second.empty_fraction);
-    }
-  }
-  if (present.size() < kMinPresentViews) return no_baseline;
-  const auto p90 = present.begin() + static_cast<std::ptrdiff_t>(present.size() * 9 / 10);
-  std::nth_element(present.begin(), p90, present.end());
-  const float baseline = std::min(1.f, *p90 + config.min_empty_fraction_over_present);
-  return {std::max(config.min_empty_fraction, baseline), baseline};
-}
-
-// What a run of views that saw a place empty says, once min_empty_views of them agree.
-enum class EmptyEvidence {
-  // The place is empty now: a later view that sees the object there again cancels the run (it
-  // is back, or never went). Removals are judged so, after an object's last sighting.
-  kLatest,
-  // The place was empty at some time: later views that see the object there do not cancel a
-  // completed run, they only show that it arrived since. Additions are judged so, before an
-  // object's first sighting: the views between its arrival and its first detection see it there
-  // (too far or too small for the detector yet), and say nothing against the empty place before.
-  kEver,
-};
-
-// Scans the keyframes of `visibility` in [from, to) that did not observe the object: counts the
-// independent views that saw its place empty (`empty_fraction_at` each keyframe) since the last
-// one that saw it there. Returns the keyframe at which that count reached min_empty_views (0:
-// never, or cancelled by a later view that saw it there, for kLatest), and whether any keyframe
-// could judge the place.
-KeyframeId EmptyViewsBetween(const std::map<KeyframeId, ObjectVisibility>& visibility,
-                             const std::set<KeyframeId>& observed, KeyframeId from, KeyframeId to,
-                             const std::map<KeyframeId, int>& view_of_keyframe,
-                             const std::function<float(KeyframeId)>& empty_fraction_at,
-                             const ChangeConfig& config, EmptyEvidence kind, bool* judged) {
-  std::set<int> empty_views;
-  KeyframeId reached_at = 0;
-  for (auto it = visibility.lower_bound(from); it != visibility.end() && it->first < to; ++it) {
-    if (observed.count(it->first) > 0) continue;
-    const ObjectVisibility& seen = it->second;
-    if (CouldJudgePlace(seen, config) && judged != nullptr) *judged = true;
-    const float empty_fraction = empty_fraction_at(it->first);
-    if (SawItThere(seen, empty_fraction, config)) {
-      if (kind == EmptyEvidence::kEver && reached_at != 0) return reached_at;
-      empty_views.clear();
-      reached_at = 0;
-      continue;
-    }
-    if (!SawPlaceEmpty(seen, empty_fraction, config)) continue;
-    const auto view = view_of_keyframe.find(it->first);
-    empty_views.insert(view != view_of_keyframe.end() ? view->second
-                                                      : -static_cast<int>(it->first));
-    if (reached_at == 0 && static_cast<int>(empty_views.size()) >= config.min_empty_views) {
-      reached_at = it->first;
-    }
-  }
-  return reached_at;
-}
 
 // Sizes along the bounding box's axes, largest first.
 std::array<float, 3> SortedExtents(const MapObject& object) {
@@ -286,12 +181,14 @@ ObjectChanges DetectChanges(const ChangeInputs& inputs, const ChangeConfig& conf
     evidence.first_seen = *observed.begin();
     evidence.last_seen = *observed.rbegin();
     const std::map<KeyframeId, ObjectVisibility>& visibility = inputs.visibility_of(object);
+    evidence.visibility = &visibility;
     auto session_of = [&inputs](KeyframeId keyframe) -> std::int64_t {
       return inputs.session_of ? inputs.session_of(keyframe) : 0;
     };
     std::set<std::int64_t> detecting_sessions;
     for (const KeyframeId keyframe : observed) detecting_sessions.insert(session_of(keyframe));
     const EmptyFractions fractions = EmptyFractionsOf(visibility, observed, config);
+    evidence.between_sessions = fractions.between_sessions;
     auto empty_fraction_at = [&](KeyframeId keyframe) {
       return detecting_sessions.count(session_of(keyframe)) > 0 ? fractions.within_session
                                                                 : fractions.between_sessions;
@@ -309,8 +206,10 @@ ObjectChanges DetectChanges(const ChangeInputs& inputs, const ChangeConfig& conf
     // and many saw there without detecting, is no removal when its place changes.
     evidence.counts = inputs.confirmed_through(
         object, evidence.seen_empty_at != 0 ? evidence.seen_empty_at : kMaxKeyframeId);
-    places.emplace(id, evidence);
+    evidence.observed = std::move(observed);
+    places.emplace(id, std::move(evidence));
   }
+  MarkStackTopsTakenAway(inputs, config, &places, &changes);
 
   // Moves: removed objects and later arrivals of their label, shape and colour are paired, the
   // surest pairs first. Surest are arrivals that only a move explains: their place was seen
