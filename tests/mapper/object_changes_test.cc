@@ -343,8 +343,16 @@ class GivenScene {
   // along x, `spacing` apart from `x0`.
   ObjectId AddObject(int label, float score, float x0, float spacing,
                      const std::array<std::uint8_t, 3>& colour, KeyframeId from, KeyframeId to) {
+    std::vector<KeyframeId> keyframes;
+    for (KeyframeId keyframe = from; keyframe <= to; ++keyframe) keyframes.push_back(keyframe);
+    return AddObjectSeenIn(label, score, x0, spacing, colour, keyframes);
+  }
+  // The same, detected in `keyframes` (ascending).
+  ObjectId AddObjectSeenIn(int label, float score, float x0, float spacing,
+                           const std::array<std::uint8_t, 3>& colour,
+                           const std::vector<KeyframeId>& keyframes) {
     ObjectId id = 0;
-    for (KeyframeId keyframe = from; keyframe <= to; ++keyframe) {
+    for (const KeyframeId keyframe : keyframes) {
       ObjectObservation observation;
       observation.keyframe_id = keyframe;
       observation.class_scores = {{label, score}};
@@ -484,6 +492,29 @@ TEST(DetectChangesPairing, TheArrivalOnlyAMoveExplainsIsTheMove) {
   ASSERT_EQ(changes.histories.count(on_the_table), 1u);
   EXPECT_EQ(changes.histories.at(on_the_table).added_at, 4);
   EXPECT_EQ(changes.histories.at(on_the_table).state, ObjectState::kPresent);
+}
+
+// A book put down in the second session where, in the first, a bottle beside that place was
+// once boxed as a book: that one detection joins the new book's object. The book taken away
+// from elsewhere in between is still the one that moved there.
+TEST(DetectChangesPairing, ADetectionOfOneViewInAnEarlierSessionDoesNotMakeTheArrivalOlder) {
+  const int book = CocoClassId("book");
+  GivenScene scene(6);
+  scene.StartSession(4, 2);
+  const ObjectId gone = scene.AddObject(book, 0.8f, 0.f, 0.005f, {150, 40, 40}, 1, 3);
+  const ObjectId arrival =
+      scene.AddObjectSeenIn(book, 0.8f, 2.f, 0.005f, {150, 40, 40}, {2, 4, 5, 6});
+  for (KeyframeId keyframe = 1; keyframe <= 6; ++keyframe) {
+    const bool first_visit = keyframe <= 3;
+    scene.See(gone, keyframe, first_visit ? 0.f : 0.9f);
+    scene.See(arrival, keyframe, first_visit && keyframe != 2 ? 0.9f : 0.f);
+  }
+  const ObjectChanges changes = scene.Changes(ChangeConfig{});
+  EXPECT_EQ(changes.PublishedId(arrival), gone);
+  ASSERT_EQ(changes.histories.count(gone), 1u);
+  EXPECT_EQ(changes.histories.at(gone).state, ObjectState::kMoved);
+  ASSERT_EQ(changes.histories.at(gone).places.size(), 2u);
+  EXPECT_EQ(changes.histories.at(gone).places[1].first_seen, 4);
 }
 
 // A chair whose model took in the table edge it stood at (bounds three times its width) moves

@@ -185,6 +185,7 @@ ObjectChanges DetectChanges(const ChangeInputs& inputs, const ChangeConfig& conf
     auto session_of = [&inputs](KeyframeId keyframe) -> std::int64_t {
       return inputs.session_of ? inputs.session_of(keyframe) : 0;
     };
+    evidence.first_seen = FirstSightingOfTwoViews(observed, *inputs.view_of_keyframe, session_of);
     std::set<std::int64_t> detecting_sessions;
     for (const KeyframeId keyframe : observed) detecting_sessions.insert(session_of(keyframe));
     const EmptyFractions fractions = EmptyFractionsOf(visibility, observed, config);

@@ -151,6 +151,23 @@ KeyframeId EmptyViewsBetween(const std::map<KeyframeId, ObjectVisibility>& visib
   return reached_at;
 }
 
+KeyframeId FirstSightingOfTwoViews(const std::set<KeyframeId>& observed,
+                                   const std::map<KeyframeId, int>& view_of_keyframe,
+                                   const std::function<std::int64_t(KeyframeId)>& session_of) {
+  auto session_first = observed.begin();
+  std::set<int> views;
+  for (auto it = observed.begin(); it != observed.end(); ++it) {
+    if (session_of(*it) != session_of(*session_first)) {
+      session_first = it;
+      views.clear();
+    }
+    const auto view = view_of_keyframe.find(*it);
+    views.insert(view != view_of_keyframe.end() ? view->second : -static_cast<int>(*it));
+    if (views.size() >= 2) return *session_first;
+  }
+  return *observed.begin();
+}
+
 void MarkStackTopsTakenAway(const ChangeInputs& inputs, const ChangeConfig& config,
                             std::map<ObjectId, PlaceEvidence>* places, ObjectChanges* changes) {
   if (!inputs.session_of) return;

@@ -76,6 +76,15 @@ enum class EmptyEvidence {
     const std::function<float(KeyframeId)>& empty_fraction_at, const ChangeConfig& config,
     EmptyEvidence kind, bool* judged);
 
+// The first sighting of an object in the first session that detected it in two independent
+// views or more (the first sighting at all when none did). One detection in a session is a
+// glimpse at most: a false detection there that a later arrival's detections joined (a bottle
+// boxed as a book where a book is put down the next day) would make the arrival older than the
+// removal it is the other half of.
+[[nodiscard]] KeyframeId FirstSightingOfTwoViews(
+    const std::set<KeyframeId>& observed, const std::map<KeyframeId, int>& view_of_keyframe,
+    const std::function<std::int64_t(KeyframeId)>& session_of);
+
 // A stack that lost its top (EmptiedUnderLaterDetections): a pile of books is modelled by a few
 // objects of one label in one place (the whole pile, the top book, the rest), and a detection
 // joins whichever fits best. When a later session still detects one of them but looks through
