@@ -416,8 +416,7 @@ void MapNode::Impl::MapFrame(RgbdFrame frame, const ros::Time& stamp,
   const bool tracked = config.estimates_poses() && last_tracking;
   const int odometry_keyframe = tracked ? last_tracking->reference_keyframe : -1;
   const Eigen::Isometry3d T_K_C =
-      tracked ? odometry->KeyframePose(odometry_keyframe).inverse() * last_tracking->T_W_C
-              : Eigen::Isometry3d::Identity();
+      tracked ? PoseOnReferenceKeyframe(*last_tracking, *odometry) : Eigen::Isometry3d::Identity();
   if (SendKeyframe(std::move(frame), stamp, std::move(detections), odometry_keyframe, T_K_C) &&
       tracked) {
     PublishTrajectory();

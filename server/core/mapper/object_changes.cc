@@ -178,7 +178,6 @@ ObjectChanges DetectChanges(const ChangeInputs& inputs, const ChangeConfig& conf
     }
     PlaceEvidence evidence;
     evidence.object = &object;
-    evidence.first_seen = *observed.begin();
     evidence.last_seen = *observed.rbegin();
     const std::map<KeyframeId, ObjectVisibility>& visibility = inputs.visibility_of(object);
     evidence.visibility = &visibility;
@@ -189,7 +188,6 @@ ObjectChanges DetectChanges(const ChangeInputs& inputs, const ChangeConfig& conf
     std::set<std::int64_t> detecting_sessions;
     for (const KeyframeId keyframe : observed) detecting_sessions.insert(session_of(keyframe));
     const EmptyFractions fractions = EmptyFractionsOf(visibility, observed, config);
-    evidence.between_sessions = fractions.between_sessions;
     auto empty_fraction_at = [&](KeyframeId keyframe) {
       return detecting_sessions.count(session_of(keyframe)) > 0 ? fractions.within_session
                                                                 : fractions.between_sessions;

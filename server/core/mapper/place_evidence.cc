@@ -7,6 +7,9 @@
 namespace objmap {
 namespace {
 
+// Fewer views that detected an object and judged its place: no baseline to speak of.
+constexpr std::size_t kMinPresentViews = 3;
+
 // The keyframe at which a later session saw an object's place empty although it still detected
 // the object there: the top of a stack taken away (a book off a pile of books). The book below
 // is still there and detected, and its detections keep joining the object that modelled the
@@ -20,16 +23,10 @@ KeyframeId EmptiedUnderLaterDetections(const PlaceEvidence& place, std::int64_t 
                                        const KeyframeSessionLookup& session_of,
                                        const std::map<KeyframeId, int>& view_of_keyframe,
                                        const ChangeConfig& config) {
-  const std::size_t present_before = static_cast<std::size_t>(std::count_if(
-      place.observed.begin(), place.observed.lower_bound(session_start), [&](KeyframeId id) {
-        const auto it = place.visibility->find(id);
-        return it != place.visibility->end() && CouldJudgePlace(it->second, config);
-      }));
-  if (!(config.min_empty_fraction_over_present > 0.f) || present_before < kMinPresentViews) {
-    return 0;
-  }
-  const float threshold =
-      EmptyFractionsOf(*place.visibility, place.observed, config, session_start).between_sessions;
+  const EmptyFractions before =
+      EmptyFractionsOf(*place.visibility, place.observed, config, session_start);
+  if (!before.baseline) return 0;
+  const float threshold = before.between_sessions;
   int judged = 0, empty = 0;
   std::set<int> empty_views;
   KeyframeId reached_at = 0;
@@ -114,7 +111,7 @@ EmptyFractions EmptyFractionsOf(const std::map<KeyframeId, ObjectVisibility>& vi
   const auto p90 = present.begin() + static_cast<std::ptrdiff_t>(present.size() * 9 / 10);
   std::nth_element(present.begin(), p90, present.end());
   const float baseline = std::min(1.f, *p90 + config.min_empty_fraction_over_present);
-  return {std::max(config.min_empty_fraction, baseline), baseline};
+  return {std::max(config.min_empty_fraction, baseline), baseline, /*baseline=*/true};
 }
 
 // Scans the keyframes of `visibility` in [from, to) that did not observe the object: counts the

@@ -26,11 +26,7 @@ struct PlaceEvidence {
   bool counts = false;             // confirmed (as of its last sighting, when gone)
   const std::map<KeyframeId, ObjectVisibility>* visibility = nullptr;  // every keyframe's view
   std::set<KeyframeId> observed;  // keyframes with an observation of it
-  float between_sessions = 0.f;   // EmptyFractions::between_sessions
 };
-
-// Fewer views that detected an object and judged its place: no baseline to speak of.
-constexpr std::size_t kMinPresentViews = 3;
 
 // A view clearly saw the object there: its place in view, and at most half the share of
 // see-through points that would call it empty.
@@ -45,6 +41,7 @@ constexpr std::size_t kMinPresentViews = 3;
 struct EmptyFractions {
   float within_session = 0.f;    // in a session that detected it there
   float between_sessions = 0.f;  // in another session
+  bool baseline = false;         // from the views that detected it (else min_empty_fraction)
 };
 
 /// What the views that detected an object saw through, plus min_empty_fraction_over_present

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "odometry/rgbd_odometry.h"
+#include "odometry/tracked_keyframes.h"
 
 namespace objmap {
 
@@ -37,7 +38,7 @@ class HeldKeyframes {
     Held held;
     held.payload = std::move(payload);
     held.odometry_keyframe = tracked.reference_keyframe;
-    held.T_K_C = odometry.KeyframePose(tracked.reference_keyframe).inverse() * tracked.T_W_C;
+    held.T_K_C = PoseOnReferenceKeyframe(tracked, odometry);
     by_fragment_[tracked.fragment].push_back(std::move(held));
     ++count_;
     std::vector<Held> dropped;

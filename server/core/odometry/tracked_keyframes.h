@@ -11,12 +11,17 @@
 
 namespace objmap {
 
+/// Where the frame `report` tracked lies on the odometry keyframe it was tracked against.
+[[nodiscard]] inline Eigen::Isometry3d PoseOnReferenceKeyframe(const TrackingReport& report,
+                                                               const RgbdOdometry& odometry) {
+  return odometry.KeyframePose(report.reference_keyframe).inverse() * report.T_W_C;
+}
+
 class TrackedKeyframes {
  public:
   /// `report` is the tracking of the frame that became map keyframe `id` (not kLost).
   void Add(KeyframeId id, const TrackingReport& report, const RgbdOdometry& odometry) {
-    on_keyframe_[id] = {report.reference_keyframe,
-                        odometry.KeyframePose(report.reference_keyframe).inverse() * report.T_W_C};
+    on_keyframe_[id] = {report.reference_keyframe, PoseOnReferenceKeyframe(report, odometry)};
   }
 
   /// Map keyframe `id`, `T_K_C` from odometry keyframe `keyframe` (a keyframe held while its
