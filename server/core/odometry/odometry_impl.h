@@ -256,6 +256,12 @@ struct RgbdOdometry::Impl {
   // look-alikes would skip. Adds their votes to `votes`; returns the index of the chosen one.
   int ConsensusWithNeighbours(const FrameFeatures& features, const CameraIntrinsics& K,
                               std::vector<Vote>* votes, std::string* why);
+  // When no vote places the frame: one PnP over the points of the map keyframes that look most
+  // like it (OdometryConfig::relocalisation_map_candidates). Placed: the fit against the
+  // keyframe with the most inliers is appended to `votes` and its index returned; -1 and `why`
+  // otherwise.
+  int PlaceByMapPoints(const FrameFeatures& features, const CameraIntrinsics& K,
+                       std::vector<Vote>* votes, std::string* why);
   // The first keyframe, at T_W_C: tracking starts from it. False when too few keypoints have
   // depth.
   bool Start(const FrameFeatures& features, const Eigen::Isometry3d& T_W_C, std::string* why);

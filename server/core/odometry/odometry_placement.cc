@@ -1,7 +1,9 @@
 // Placing a camera that may be anywhere in RgbdOdometry's map (a new session, tracking lost): the
-// keyframes that look like the frame, fits voted on by consensus, and the provisional fragments
-// that frames no keyframe places are tracked in until one of them is placed.
+// keyframes that look like the frame, fits voted on by consensus, else one fit to the points of
+// those keyframes together, and the provisional fragments that frames neither places are tracked
+// in until one of them is placed.
 #include <cstdio>
+#include <map>
 
 #include "odometry/odometry_impl.h"
 
@@ -123,6 +125,136 @@ int RgbdOdometry::Impl::ConsensusWithNeighbours(const FrameFeatures& features,
   return Consensus(*votes, why);
 }
 
+int RgbdOdometry::Impl::PlaceByMapPoints(const FrameFeatures& features, const CameraIntrinsics& K,
+                                         std::vector<Vote>* votes, std::string* why) {
+  if (config.relocalisation_map_candidates <= 0 || features.descriptors.empty()) return -1;
+  // The map keyframes that look most like the frame (the map's frame only: their points must
+  // share one frame).
+  IndexKeyframes(keyframes, static_cast<int>(keyframes.size()) - 1, &relocalisation_index,
+                 &relocalisation_indexed);
+  const cv::Mat mine = StrongestDescriptors(features, config.appearance_descriptors);
+  if (mine.rows < 2 || !mine.isContinuous()) return -1;
+  std::vector<int> candidates;
+  for (const auto& [alike, k] : relocalisation_index.MostAlike(
+           mine.ptr<std::uint8_t>(), mine.rows, static_cast<int>(keyframes.size()) - 1,
+           static_cast<int>(keyframes.size()))) {
+    if (fragment_of[static_cast<std::size_t>(k)] != 0) continue;
+    candidates.push_back(k);
+    if (static_cast<int>(candidates.size()) >= config.relocalisation_map_candidates) break;
+  }
+  // Every candidate's ratio-test matches, its points in the map's frame.
+  std::vector<cv::Point3f> object_points;
+  std::vector<cv::Point2f> image_points;
+  std::vector<int> keyframe_of, keypoint_of;
+  const cv::BFMatcher matcher(cv::NORM_HAMMING);
+  for (const int k : candidates) {
+    const Keyframe& keyframe = *keyframes[static_cast<std::size_t>(k)];
+    if (keyframe.descriptors.rows < 2) continue;
+    std::vector<std::vector<cv::DMatch>> knn;
+    matcher.knnMatch(features.descriptors, keyframe.descriptors, knn, 2);
+    const Eigen::Isometry3d& T_W_K = poses[static_cast<std::size_t>(k)];
+    for (const auto& pair : knn) {
+      if (pair.size() < 2 || pair[0].distance >= config.match_ratio * pair[1].distance) continue;
+      const cv::Point3f& p = keyframe.points_K[static_cast<std::size_t>(pair[0].trainIdx)];
+      const Eigen::Vector3d p_W = T_W_K * Eigen::Vector3d(p.x, p.y, p.z);
+      object_points.emplace_back(static_cast<float>(p_W.x()), static_cast<float>(p_W.y()),
+                                 static_cast<float>(p_W.z()));
+      image_points.push_back(features.keypoints[static_cast<std::size_t>(pair[0].queryIdx)].pt);
+      keyframe_of.push_back(k);
+      keypoint_of.push_back(pair[0].queryIdx);
+    }
+  }
+  auto refuse = [&](const std::string& reason) {
+    *why = reason;
+    return -1;
+  };
+  if (static_cast<int>(object_points.size()) < config.relocalisation_map_min_inliers) {
+    return refuse("no keyframe of the map fits the frame, nor " +
+                  std::to_string(candidates.size()) + " look-alikes together (" +
+                  std::to_string(object_points.size()) + " matches)");
+  }
+  const cv::Matx33d camera(K.fx, 0, K.cx, 0, K.fy, K.cy, 0, 0, 1);
+  cv::Mat rvec, tvec;
+  std::vector<int> inliers;
+  cv::RNG& generator = cv::theRNG();
+  const std::uint64_t caller_state = generator.state;
+  generator.state = 0x9E3779B97F4A7C15ull;  // reproducible, as in Fit
+  const bool solved = cv::solvePnPRansac(object_points, image_points, camera, cv::noArray(), rvec,
+                                         tvec, false, config.relocalisation_map_ransac_iterations,
+                                         static_cast<float>(config.ransac_reprojection_px), 0.999,
+                                         inliers, cv::SOLVEPNP_EPNP);
+  generator.state = caller_state;
+  if (!solved) return refuse("no pose fits the look-alike keyframes' points together");
+  // Inliers are counted once per keypoint of the frame (one keypoint may match a point of
+  // several keyframes), and per keyframe.
+  std::vector<std::uint8_t> keypoint_inlier(features.keypoints.size(), 0);
+  std::map<int, int> per_keyframe;
+  for (const int i : inliers) {
+    keypoint_inlier[static_cast<std::size_t>(keypoint_of[static_cast<std::size_t>(i)])] = 1;
+    ++per_keyframe[keyframe_of[static_cast<std::size_t>(i)]];
+  }
+  const int distinct =
+      static_cast<int>(std::count(keypoint_inlier.begin(), keypoint_inlier.end(), std::uint8_t{1}));
+  int supporting = 0, reference = -1, most = 0;
+  for (const auto& [k, n] : per_keyframe) {
+    supporting += n >= config.relocalisation_map_keyframe_min_inliers;
+    if (n > most) {
+      most = n;
+      reference = k;
+    }
+  }
+  if (distinct < config.relocalisation_map_min_inliers ||
+      supporting < config.relocalisation_map_min_keyframes) {
+    char text[240];
+    std::snprintf(text, sizeof(text),
+                  "no keyframe of the map fits the frame strongly; the %zu look-alikes together: "
+                  "%d inliers (%d needed), %d keyframes with %d or more (%d needed)",
+                  candidates.size(), distinct, config.relocalisation_map_min_inliers, supporting,
+                  config.relocalisation_map_keyframe_min_inliers,
+                  config.relocalisation_map_min_keyframes);
+    return refuse(text);
+  }
+  std::vector<cv::Point3f> inlier_object;
+  std::vector<cv::Point2f> inlier_image;
+  for (const int i : inliers) {
+    inlier_object.push_back(object_points[static_cast<std::size_t>(i)]);
+    inlier_image.push_back(image_points[static_cast<std::size_t>(i)]);
+  }
+  cv::solvePnPRefineLM(inlier_object, inlier_image, camera, cv::noArray(), rvec, tvec);
+  const Eigen::Isometry3d T_W_C = FromRvecTvec(rvec, tvec).inverse();
+  PoseFit fit;
+  fit.matches = static_cast<int>(object_points.size());
+  fit.inliers = distinct;
+  const Eigen::Isometry3d T_K_C_features =
+      poses[static_cast<std::size_t>(reference)].inverse() * T_W_C;
+  Eigen::Isometry3d T_K_C = T_K_C_features;
+  if (config.depth_refinement) {
+    RefineByDepth(features, *keyframes[static_cast<std::size_t>(reference)], &T_K_C, &fit);
+    if (!fit.depth_refined) {
+      return refuse(
+          "the look-alike keyframes together place the frame, but its depth does not "
+          "align with keyframe " +
+          std::to_string(reference) + "'s there");
+    }
+    // Features of many keyframes fix the pose within a few millimetres; a dense step that moves
+    // it farther than the consensus limits slid along a plane (a desk top and the wall behind it
+    // leave one direction free): the frame is not placed, a later one is.
+    const Eigen::Isometry3d correction = T_K_C_features.inverse() * T_K_C;
+    if (!WithinConsensus(correction)) {
+      char text[200];
+      std::snprintf(text, sizeof(text),
+                    "the look-alike keyframes together place the frame, but its depth moves the "
+                    "pose %.1f cm and %.1f deg from there (a plane leaving a direction free?)",
+                    100.0 * correction.translation().norm(), AngleDeg(correction.linear()));
+      return refuse(text);
+    }
+  }
+  fit.T_K_C = T_K_C;
+  fit.ok = true;
+  votes->push_back({reference, std::move(fit)});
+  return static_cast<int>(votes->size()) - 1;
+}
+
 bool RgbdOdometry::Impl::AttachFragment(const FrameFeatures& features, const CameraIntrinsics& K,
                                         const Eigen::Isometry3d& T_F_C, Eigen::Isometry3d* T_W_C,
                                         PoseFit* fit, int* reference, std::string* why) {
@@ -134,7 +266,12 @@ bool RgbdOdometry::Impl::AttachFragment(const FrameFeatures& features, const Cam
     if (candidate.ok) votes.push_back({k, std::move(candidate)});
   }
   std::string conflict;
-  const int chosen = ConsensusWithNeighbours(features, K, &votes, &conflict);
+  int chosen = ConsensusWithNeighbours(features, K, &votes, &conflict);
+  if (chosen < 0) {
+    std::string pooled;
+    chosen = PlaceByMapPoints(features, K, &votes, &pooled);
+    if (chosen < 0 && conflict.empty() && !pooled.empty()) conflict = pooled;
+  }
   if (chosen >= 0) {
     const int k = votes[static_cast<std::size_t>(chosen)].keyframe;
     PoseFit& candidate = votes[static_cast<std::size_t>(chosen)].fit;

@@ -39,6 +39,15 @@ bool OdometryConfig::IsValid(std::string* why) const {
         "and the relocalisation consensus limits positive";
     return false;
   }
+  if (relocalisation_map_candidates < 0 || relocalisation_map_ransac_iterations < 1 ||
+      relocalisation_map_min_inliers < min_inliers || relocalisation_map_keyframe_min_inliers < 1 ||
+      relocalisation_map_min_keyframes < 1) {
+    *why =
+        "odometry: relocalisation_map_candidates >= 0, relocalisation_map_ransac_iterations >= 1, "
+        "relocalisation_map_min_inliers >= min_inliers, relocalisation_map_keyframe_min_inliers "
+        "and relocalisation_map_min_keyframes >= 1";
+    return false;
+  }
   if (!(edge_sigma_m > 0.0) || !(edge_sigma_deg > 0.0) || !(edge_feature_sigma_m > 0.0) ||
       !(edge_feature_sigma_deg > 0.0)) {
     *why = "odometry: edge_sigma_m, edge_sigma_deg and the edge_feature sigmas must be positive";
@@ -457,11 +466,18 @@ TrackingReport RgbdOdometry::Track(const RgbdFrame& frame) {
       impl.current_keyframe = k;
       break;
     }
-    if (!accepted && !votes.empty()) {
+    if (!accepted) {
       std::string conflict;
-      const int chosen =
-          impl.ConsensusWithNeighbours(*features, frame.intrinsics, &votes, &conflict);
+      int chosen = votes.empty() ? -1
+                                 : impl.ConsensusWithNeighbours(*features, frame.intrinsics, &votes,
+                                                                &conflict);
       if (!conflict.empty()) first_failure = conflict;
+      if (chosen < 0) {
+        // No keyframe alone: the look-alikes' points together.
+        std::string pooled;
+        chosen = impl.PlaceByMapPoints(*features, frame.intrinsics, &votes, &pooled);
+        if (chosen < 0 && conflict.empty() && !pooled.empty()) first_failure = pooled;
+      }
       if (chosen >= 0) {
         const int k = votes[static_cast<std::size_t>(chosen)].keyframe;
         fit = std::move(votes[static_cast<std::size_t>(chosen)].fit);

@@ -114,6 +114,22 @@ struct OdometryConfig {
   /// redkitchen's correct ones within 2-3 cm, the reference poses' own disagreement).
   double relocalisation_consensus_m = 0.05;
   double relocalisation_consensus_deg = 5.0;
+  /// When no single keyframe places the frame: its features matched to the points of the
+  /// relocalisation_map_candidates map keyframes that look most like it (appearance index), all
+  /// in the map's frame, and one PnP RANSAC (relocalisation_map_ransac_iterations) over them, as
+  /// a camera is placed in a map of points. A view from farther or higher than any stored one
+  /// shares 30-65 right matches with each keyframe but 200-400 with them together (synthetic
+  /// revisits, lab 51). Placed with at least relocalisation_map_min_inliers inliers (distinct
+  /// keypoints of the frame), relocalisation_map_keyframe_min_inliers or more from each of at
+  /// least relocalisation_map_min_keyframes keyframes, and the dense step against the keyframe
+  /// with the most agreeing within the consensus limits (a slide along a plane is refused).
+  /// Sessions of rooms the map does not hold reached at most 19 such inliers (80 sessions,
+  /// docs/evaluation.md). 0 candidates: off.
+  int relocalisation_map_candidates = 10;
+  int relocalisation_map_ransac_iterations = 1000;
+  int relocalisation_map_min_inliers = 60;
+  int relocalisation_map_keyframe_min_inliers = 10;
+  int relocalisation_map_min_keyframes = 3;
   /// A frame that can be neither tracked nor placed in the map (a session starting where its
   /// first views share too little with the map's, tracking lost mid-session) starts a
   /// provisional fragment: it and the frames after it are tracked among themselves in a frame of
