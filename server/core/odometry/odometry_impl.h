@@ -145,6 +145,47 @@ inline Eigen::Isometry3d FromRvecTvec(const cv::Mat& rvec, const cv::Mat& tvec) 
   return T;
 }
 
+// PnP RANSAC (EPnP) of image points on 3D points. RANSAC draws from OpenCV's per-thread
+// generator: a fixed seed per solve makes the trajectory the same whichever thread tracks and
+// whatever ran on it before (reproducible runs and tests); the caller's generator state is given
+// back. False when RANSAC finds no pose.
+inline bool SeededPnPRansac(const std::vector<cv::Point3f>& object_points,
+                            const std::vector<cv::Point2f>& image_points, const cv::Matx33d& camera,
+                            int iterations, double reprojection_px, cv::Mat* rvec, cv::Mat* tvec,
+                            std::vector<int>* inliers) {
+  cv::RNG& generator = cv::theRNG();
+  const std::uint64_t caller_state = generator.state;
+  generator.state = 0x9E3779B97F4A7C15ull;
+  const bool solved = cv::solvePnPRansac(
+      object_points, image_points, camera, cv::noArray(), *rvec, *tvec, false, iterations,
+      static_cast<float>(reprojection_px), 0.999, *inliers, cv::SOLVEPNP_EPNP);
+  generator.state = caller_state;
+  return solved;
+}
+
+// Least squares on RANSAC's inliers (its pose comes from a minimal set); returns their
+// reprojection RMSE, pixels.
+inline double RefineOnInliers(const std::vector<cv::Point3f>& object_points,
+                              const std::vector<cv::Point2f>& image_points,
+                              const std::vector<int>& inliers, const cv::Matx33d& camera,
+                              cv::Mat* rvec, cv::Mat* tvec) {
+  std::vector<cv::Point3f> inlier_object;
+  std::vector<cv::Point2f> inlier_image;
+  for (const int i : inliers) {
+    inlier_object.push_back(object_points[static_cast<std::size_t>(i)]);
+    inlier_image.push_back(image_points[static_cast<std::size_t>(i)]);
+  }
+  cv::solvePnPRefineLM(inlier_object, inlier_image, camera, cv::noArray(), *rvec, *tvec);
+  std::vector<cv::Point2f> projected;
+  cv::projectPoints(inlier_object, *rvec, *tvec, camera, cv::noArray(), projected);
+  double sum_sq = 0.0;
+  for (std::size_t i = 0; i < projected.size(); ++i) {
+    const cv::Point2f d = projected[i] - inlier_image[i];
+    sum_sq += d.dot(d);
+  }
+  return std::sqrt(sum_sq / static_cast<double>(std::max<std::size_t>(1, projected.size())));
+}
+
 // A loop search for one new keyframe: its features and everything it reads, copied when it
 // starts (keyframes are shared, being immutable), so that tracking goes on meanwhile.
 struct LoopJob {

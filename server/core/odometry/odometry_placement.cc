@@ -176,15 +176,10 @@ int RgbdOdometry::Impl::PlaceByMapPoints(const FrameFeatures& features, const Ca
   const cv::Matx33d camera(K.fx, 0, K.cx, 0, K.fy, K.cy, 0, 0, 1);
   cv::Mat rvec, tvec;
   std::vector<int> inliers;
-  cv::RNG& generator = cv::theRNG();
-  const std::uint64_t caller_state = generator.state;
-  generator.state = 0x9E3779B97F4A7C15ull;  // reproducible, as in Fit
-  const bool solved = cv::solvePnPRansac(object_points, image_points, camera, cv::noArray(), rvec,
-                                         tvec, false, config.relocalisation_map_ransac_iterations,
-                                         static_cast<float>(config.ransac_reprojection_px), 0.999,
-                                         inliers, cv::SOLVEPNP_EPNP);
-  generator.state = caller_state;
-  if (!solved) return refuse("no pose fits the look-alike keyframes' points together");
+  if (!SeededPnPRansac(object_points, image_points, camera,
+                       config.relocalisation_map_ransac_iterations, config.ransac_reprojection_px,
+                       &rvec, &tvec, &inliers))
+    return refuse("no pose fits the look-alike keyframes' points together");
   // Inliers are counted once per keypoint of the frame (one keypoint may match a point of
   // several keyframes), and per keyframe.
   std::vector<std::uint8_t> keypoint_inlier(features.keypoints.size(), 0);
@@ -214,15 +209,9 @@ int RgbdOdometry::Impl::PlaceByMapPoints(const FrameFeatures& features, const Ca
                   config.relocalisation_map_min_keyframes);
     return refuse(text);
   }
-  std::vector<cv::Point3f> inlier_object;
-  std::vector<cv::Point2f> inlier_image;
-  for (const int i : inliers) {
-    inlier_object.push_back(object_points[static_cast<std::size_t>(i)]);
-    inlier_image.push_back(image_points[static_cast<std::size_t>(i)]);
-  }
-  cv::solvePnPRefineLM(inlier_object, inlier_image, camera, cv::noArray(), rvec, tvec);
-  const Eigen::Isometry3d T_W_C = FromRvecTvec(rvec, tvec).inverse();
   PoseFit fit;
+  fit.rmse_px = RefineOnInliers(object_points, image_points, inliers, camera, &rvec, &tvec);
+  const Eigen::Isometry3d T_W_C = FromRvecTvec(rvec, tvec).inverse();
   fit.matches = static_cast<int>(object_points.size());
   fit.inliers = distinct;
   const Eigen::Isometry3d T_K_C_features =

@@ -268,39 +268,15 @@ PoseFit RgbdOdometry::Impl::Fit(const FrameFeatures& features, const Keyframe& k
   const cv::Matx33d camera(K.fx, 0, K.cx, 0, K.fy, K.cy, 0, 0, 1);
   cv::Mat rvec, tvec;
   std::vector<int> inliers;
-  // RANSAC draws from OpenCV's per-thread generator: a fixed seed per fit makes the trajectory
-  // the same whichever thread tracks and whatever ran on it before (reproducible runs and
-  // tests); the caller's generator state is given back.
-  cv::RNG& generator = cv::theRNG();
-  const std::uint64_t caller_state = generator.state;
-  generator.state = 0x9E3779B97F4A7C15ull;
-  const bool solved = cv::solvePnPRansac(object_points, image_points, camera, cv::noArray(), rvec,
-                                         tvec, false, config.ransac_iterations,
-                                         static_cast<float>(config.ransac_reprojection_px), 0.999,
-                                         inliers, cv::SOLVEPNP_EPNP);
-  generator.state = caller_state;
+  const bool solved = SeededPnPRansac(object_points, image_points, camera, config.ransac_iterations,
+                                      config.ransac_reprojection_px, &rvec, &tvec, &inliers);
   fit.inliers = static_cast<int>(inliers.size());
   if (!solved || fit.inliers < config.min_inliers) {
     fit.why = std::to_string(fit.inliers) + " PnP inliers of " + std::to_string(fit.matches) +
               " matches, " + std::to_string(config.min_inliers) + " needed";
     return fit;
   }
-  // Least squares on the inliers (RANSAC's pose comes from a minimal set).
-  std::vector<cv::Point3f> inlier_object;
-  std::vector<cv::Point2f> inlier_image;
-  for (int i : inliers) {
-    inlier_object.push_back(object_points[static_cast<std::size_t>(i)]);
-    inlier_image.push_back(image_points[static_cast<std::size_t>(i)]);
-  }
-  cv::solvePnPRefineLM(inlier_object, inlier_image, camera, cv::noArray(), rvec, tvec);
-  std::vector<cv::Point2f> projected;
-  cv::projectPoints(inlier_object, rvec, tvec, camera, cv::noArray(), projected);
-  double sum_sq = 0.0;
-  for (std::size_t i = 0; i < projected.size(); ++i) {
-    const cv::Point2f d = projected[i] - inlier_image[i];
-    sum_sq += d.dot(d);
-  }
-  fit.rmse_px = std::sqrt(sum_sq / static_cast<double>(std::max<std::size_t>(1, projected.size())));
+  fit.rmse_px = RefineOnInliers(object_points, image_points, inliers, camera, &rvec, &tvec);
   // PnP maps keyframe points into this camera: T_C_K.
   Eigen::Isometry3d T_K_C = FromRvecTvec(rvec, tvec).inverse();
   if (config.depth_refinement) RefineByDepth(features, keyframe, &T_K_C, &fit);
