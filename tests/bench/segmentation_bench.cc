@@ -261,7 +261,8 @@ void RunKitchen(const std::string& sequence, int frames, int stride, int pcl_fra
       stopwatch = Stopwatch();
       const objmap::SegmentIndex index = objmap::IndexSegments(result, cloud);
       const auto segmented =
-          objmap::SegmentDetections(frame, cloud, result, index, detections, 0, mapper_config);
+          objmap::SegmentDetections(frame, cloud, objmap::DepthMillimetres(frame.depth), result,
+                                    index, detections, 0, mapper_config);
       detection_to_segment[r] = stopwatch.Elapsed();
       parts[r] = whole.Elapsed();
       objmap::KeyframeResult keyframe;

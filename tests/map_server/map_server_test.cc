@@ -347,6 +347,11 @@ TEST_F(MapServerScene, RestartRestoresTheSameMap) {
     EXPECT_EQ(after[i]->class_id, before[i]->class_id);
     EXPECT_FLOAT_EQ(after[i]->confidence, before[i]->confidence);
     EXPECT_LT((after[i]->centroid_W - before[i]->centroid_W).norm(), 1e-4);
+    // Observations are stored as their pixels and rebuilt from the stored depth: the models
+    // are the same, bit for bit.
+    ASSERT_TRUE(after[i]->model_W && before[i]->model_W);
+    EXPECT_EQ(after[i]->model_W->points, before[i]->model_W->points);
+    EXPECT_EQ(after[i]->model_W->colors, before[i]->model_W->colors);
   }
   // The restart's session sees the first view again, unchanged: a revisit of keyframe 1, no
   // new keyframe (MapServerConfig::thinning).

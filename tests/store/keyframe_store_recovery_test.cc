@@ -10,6 +10,7 @@
 #include <fstream>
 #include <random>
 
+#include "store/keyframe_codec.h"
 #include "store/keyframe_store.h"
 #include "store_test_data.h"
 
@@ -20,11 +21,15 @@ using testing::ExpectSameKeyframe;
 using testing::MakeKeyframe;
 using testing::MakeObservation;
 
-// Turns a file of this version into one of version 3, which had no revisits ...
-constexpr char kWithoutRevisitsSql[] = "DROP TABLE revisits;";
+// Turns a file of this version into one of version 4, whose observations were all points ...
+constexpr char kWithoutPixelsSql[] = "ALTER TABLE observations DROP COLUMN pixels;";
+// ... into one of version 3, which had no revisits either ...
+constexpr char kWithoutRevisitsSql[] =
+    "ALTER TABLE observations DROP COLUMN pixels; DROP TABLE revisits;";
 // ... and into one of version 2, which had no sessions either.
 constexpr char kWithoutSessionsSql[] =
-    "DROP TABLE revisits; DROP TABLE sessions; DROP INDEX keyframes_by_session;"
+    "ALTER TABLE observations DROP COLUMN pixels;"
+    " DROP TABLE revisits; DROP TABLE sessions; DROP INDEX keyframes_by_session;"
     " ALTER TABLE keyframes DROP COLUMN session_id;";
 
 class KeyframeStoreRecoveryTest : public testing::StoreTest {
@@ -89,6 +94,75 @@ TEST_F(KeyframeStoreRecoveryTest, ADamagedPoseIsReportedNotLoaded) {
   std::string why;
   EXPECT_FALSE(store->LoadAll(&map, &why));
   EXPECT_NE(why.find("keyframe 2: corrupt pose"), std::string::npos) << why;
+}
+
+// A version 4 file keeps its observations' points; new observations made from their keyframe's
+// depth are kept as pixels beside them.
+TEST_F(KeyframeStoreRecoveryTest, MigratesASchemaVersion4FileAndKeepsItsObservationsPoints) {
+  CreateStore(Path(), 2);
+  RunSql(Path(), std::string(kWithoutPixelsSql) + " PRAGMA user_version = 4;");
+  auto store = OpenStore(Path());
+  ASSERT_NE(store, nullptr);
+  StoreChange change;
+  change.keyframe = MakeKeyframe(3);
+  change.observations = {testing::MakeObservationOfPixels(3, *change.keyframe, 2, 20, 2, 9)};
+  std::string why;
+  ASSERT_TRUE(store->Commit(change, &why)) << why;
+  StoredMap map;
+  ASSERT_TRUE(store->LoadAll(&map, &why)) << why;
+  ASSERT_EQ(map.observations.size(), 3u);
+  testing::ExpectSameObservation(MakeObservation(1, 1, 50), map.observations[0]);
+  testing::ExpectSameObservation(MakeObservation(2, 2, 50), map.observations[1]);
+  testing::ExpectSameObservation(change.observations[0], map.observations[2]);
+}
+
+// Observations kept as pixels whose blob is damaged, or whose pixels no longer make the number
+// of points stored with them, are reported with their keyframe, never loaded.
+TEST_F(KeyframeStoreRecoveryTest, ObservationPixelsThatDoNotMakeItsPointsAreReported) {
+  const StoredKeyframe keyframe = MakeKeyframe(1);
+  const StoredObservation observation = testing::MakeObservationOfPixels(4, keyframe, 4, 30, 4, 20);
+  {
+    auto store = OpenStore(Path());
+    ASSERT_NE(store, nullptr);
+    StoreChange change;
+    change.keyframe = keyframe;
+    change.observations = {observation};
+    std::string why;
+    ASSERT_TRUE(store->Commit(change, &why)) << why;
+  }
+  // The same pixels, one point more than they make.
+  const ObjectObservation& o = observation.observation;
+  const auto blob = store_internal::PackSegmentPixels(o.segment_pixels, o.segment_voxel_size_m,
+                                                      o.segment_C.size() + 1);
+  std::string hex;
+  for (std::uint8_t byte : blob) {
+    const char digits[] = "0123456789ABCDEF";
+    hex += digits[byte >> 4];
+    hex += digits[byte & 15];
+  }
+  // The colours of one more point too, so that only the pixels disagree.
+  RunSql(Path(), "UPDATE observations SET pixels = X'" + hex +
+                     "', colors = colors || X'000000' WHERE object_id = 4");
+  {
+    auto store = OpenStore(Path());
+    ASSERT_NE(store, nullptr);
+    StoredMap map;
+    std::string why;
+    EXPECT_FALSE(store->LoadAll(&map, &why));
+    EXPECT_NE(why.find("observation in keyframe 1: its pixels make " +
+                       std::to_string(o.segment_C.size()) + " points of the keyframe's depth, " +
+                       std::to_string(o.segment_C.size() + 1) + " were stored"),
+              std::string::npos)
+        << why;
+  }
+  RunSql(Path(), "UPDATE observations SET pixels = X'0000A03B05' WHERE object_id = 4");
+  auto store = OpenStore(Path());
+  ASSERT_NE(store, nullptr);
+  StoredMap map;
+  std::string why;
+  EXPECT_FALSE(store->LoadAll(&map, &why));
+  EXPECT_NE(why.find("observation of object 4 in keyframe 1: corrupt blob"), std::string::npos)
+      << why;
 }
 
 TEST_F(KeyframeStoreRecoveryTest, RejectsATextFile) {

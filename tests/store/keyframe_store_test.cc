@@ -385,6 +385,48 @@ TEST_F(KeyframeStoreTest, BytesOfCountsTheStoredBlobs) {
   EXPECT_GE(store->FileBytes(), one.total + store->BytesOf(2).total + store->BytesOf(3).total);
 }
 
+// An observation made from its keyframe's stored depth is kept as its pixels (a few bytes a
+// row) and its colours, and loads with the points it had, bit for bit, also after a reopen and
+// beside observations kept as points.
+TEST_F(KeyframeStoreTest, ObservationsMadeFromTheStoredDepthAreKeptAsTheirPixels) {
+  const StoredKeyframe keyframe = MakeKeyframe(1, /*with_color=*/true, 64, 48);
+  const StoredKeyframe colorless = MakeKeyframe(2, /*with_color=*/false, 64, 48);
+  const std::vector<StoredObservation> expected = {
+      testing::MakeObservationOfPixels(1, keyframe, 8, 40, 4, 30),
+      testing::MakeObservationOfPixels(1, colorless, 0, 64, 10, 12, 0.02f),
+      MakeObservation(2, 1, 5)};
+  ASSERT_GT(expected[0].observation.segment_C.size(), 500u);
+  ASSERT_EQ(expected[0].observation.segment_C.colors.size(),
+            expected[0].observation.segment_C.size());
+  ASSERT_TRUE(expected[1].observation.segment_C.colors.empty());
+  ASSERT_FALSE(expected[1].observation.segment_C.empty());
+  {
+    auto store = OpenStore(Path());
+    ASSERT_NE(store, nullptr);
+    std::string why;
+    StoreChange first;
+    first.keyframe = keyframe;
+    first.observations = {expected[0], expected[2]};
+    ASSERT_TRUE(store->Commit(first, &why)) << why;
+    StoreChange second;
+    second.keyframe = colorless;
+    second.observations = {expected[1]};
+    ASSERT_TRUE(store->Commit(second, &why)) << why;
+    // The pixels instead of 12 bytes a point: the colours (3 a point) and about 2 runs a row.
+    const std::size_t points = expected[0].observation.segment_C.size();
+    EXPECT_LT(store->BytesOf(1).observations, 3 * points + 200 + 5 * 12 + 5 * 3 + 2 * 2 * 8);
+    EXPECT_LT(store->BytesOf(2).observations, 100u);
+    const StoredMap map = Load(*store);
+    ASSERT_EQ(map.observations.size(), 3u);
+    for (std::size_t i = 0; i < 3; ++i) ExpectSameObservation(expected[i], map.observations[i]);
+  }
+  auto store = OpenStore(Path());
+  ASSERT_NE(store, nullptr);
+  const StoredMap reopened = Load(*store);
+  ASSERT_EQ(reopened.observations.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) ExpectSameObservation(expected[i], reopened.observations[i]);
+}
+
 TEST_F(KeyframeStoreTest, ReadersRunAlongsideCommits) {
   auto store = OpenStore(Path());
   ASSERT_NE(store, nullptr);

@@ -98,6 +98,35 @@ inline StoredObservation MakeObservation(ObjectId object, KeyframeId keyframe, i
   return o;
 }
 
+/// An observation of `object` made from `keyframe`'s depth as the mapper makes it
+/// (SegmentPointsFromDepth): the pixels of the rectangle [u0, u1) x [v0, v1) and every 7th
+/// pixel of the row below it, coloured from the keyframe's colour when it has one.
+inline StoredObservation MakeObservationOfPixels(ObjectId object, const StoredKeyframe& keyframe,
+                                                 int u0, int u1, int v0, int v1,
+                                                 float voxel_size_m = 0.005f) {
+  const int width = keyframe.intrinsics.width;
+  std::vector<int> pixels;
+  for (int v = v0; v < v1; ++v) {
+    for (int u = u0; u < u1; ++u) pixels.push_back(v * width + u);
+  }
+  for (int u = 0; u < width; u += 7) pixels.push_back(v1 * width + u);
+  std::vector<std::array<std::uint8_t, 3>> rgb;
+  for (std::size_t i = 0; i + 2 < keyframe.color.rgb.size(); i += 3) {
+    rgb.push_back({keyframe.color.rgb[i], keyframe.color.rgb[i + 1], keyframe.color.rgb[i + 2]});
+  }
+  StoredObservation o;
+  o.object_id = object;
+  o.observation.keyframe_id = keyframe.id;
+  o.observation.box = {1.f * u0, 1.f * v0, 1.f * u1, 1.f * v1};
+  o.observation.class_scores = {{static_cast<int>(object % 80), 0.5f}};
+  o.observation.segment_pixels = RunsOf(pixels);
+  o.observation.segment_voxel_size_m = voxel_size_m;
+  o.observation.segment_C =
+      SegmentPointsFromDepth(keyframe.depth_mm, keyframe.intrinsics, o.observation.segment_pixels,
+                             voxel_size_m, rgb.empty() ? nullptr : &rgb);
+  return o;
+}
+
 /// Everything exact except colour, which may differ by `color_tolerance` on average (JPEG).
 inline void ExpectSameKeyframe(const StoredKeyframe& expected, const StoredKeyframe& actual,
                                double color_tolerance) {
@@ -151,6 +180,8 @@ inline void ExpectSameObservation(const StoredObservation& expected,
   EXPECT_EQ(a.class_scores, e.class_scores);
   EXPECT_EQ(a.segment_C.points, e.segment_C.points);
   EXPECT_EQ(a.segment_C.colors, e.segment_C.colors);
+  EXPECT_EQ(a.segment_pixels, e.segment_pixels);
+  EXPECT_EQ(a.segment_voxel_size_m, e.segment_voxel_size_m);
 }
 
 /// Two loads of the same database: identical, colour included.

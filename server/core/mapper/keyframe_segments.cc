@@ -322,16 +322,16 @@ std::vector<int> DetectionPixels(const SegmentationResult& segmentation,
   return pixels;
 }
 
-ColoredPoints SegmentPoints(const OrganizedCloud& cloud_C, const std::vector<int>& pixels,
-                            float voxel_size_m) {
-  ColoredPoints points;
-  points.points.reserve(pixels.size());
-  for (int i : pixels) {
-    if (!cloud_C.IsValid(i)) continue;
-    points.points.push_back(cloud_C.points_C[i]);
-    if (!cloud_C.rgb.empty()) points.colors.push_back(cloud_C.rgb[i]);
-  }
-  return VoxelDownsample(points, voxel_size_m);
+// The observation's points from the keyframe's depth as stored, with the pixels they came from:
+// the store keeps those and rebuilds the same points from the same depth.
+void SetSegment(const OrganizedCloud& cloud_C, const std::vector<std::uint16_t>& depth_mm,
+                const CameraIntrinsics& intrinsics, const std::vector<int>& pixels,
+                float voxel_size_m, ObjectObservation* observation) {
+  observation->segment_pixels = RunsOf(pixels);
+  observation->segment_voxel_size_m = voxel_size_m;
+  observation->segment_C =
+      SegmentPointsFromDepth(depth_mm, intrinsics, observation->segment_pixels, voxel_size_m,
+                             cloud_C.rgb.empty() ? nullptr : &cloud_C.rgb);
 }
 
 // The pixels one observation claimed, as a bit per pixel of the frame: cheaper to build and to
@@ -584,7 +584,8 @@ BoundingBox2D ToDepthPixels(const BoundingBox2D& box, const ColorImage& color,
 }
 
 std::vector<SegmentedDetection> SegmentDetections(
-    const RgbdFrame& frame, const OrganizedCloud& cloud_C, const SegmentationResult& segmentation,
+    const RgbdFrame& frame, const OrganizedCloud& cloud_C,
+    const std::vector<std::uint16_t>& depth_mm, const SegmentationResult& segmentation,
     const SegmentIndex& index, const std::vector<Detection>& detections, KeyframeId keyframe_id,
     const MapperConfig& config) {
   std::vector<int> order(detections.size());
@@ -609,8 +610,8 @@ std::vector<SegmentedDetection> SegmentDetections(
   };
   auto make_entry = [&](const Detection& detection, const std::vector<int>& pixels,
                         SegmentedDetection* entry) {
-    entry->observation.segment_C =
-        SegmentPoints(cloud_C, pixels, config.objects.model_voxel_size_m);
+    SetSegment(cloud_C, depth_mm, frame.intrinsics, pixels, config.objects.model_voxel_size_m,
+               &entry->observation);
     if (static_cast<int>(entry->observation.segment_C.size()) < config.min_segment_points) {
       return false;
     }
@@ -737,7 +738,8 @@ constexpr int kSurfaceSearchPx = 12;
 }  // namespace
 
 std::vector<SegmentedDetection> UnclassifiedSegments(
-    const RgbdFrame& frame, const OrganizedCloud& cloud_C, const SegmentationResult& segmentation,
+    const RgbdFrame& frame, const OrganizedCloud& cloud_C,
+    const std::vector<std::uint16_t>& depth_mm, const SegmentationResult& segmentation,
     const SegmentIndex& index, const std::vector<Detection>& detections,
     const std::vector<SegmentedDetection>& detected, KeyframeId keyframe_id,
     const MapperConfig& config) {
@@ -986,7 +988,8 @@ std::vector<SegmentedDetection> UnclassifiedSegments(
     const float size = std::max(extent.maxCoeff(), rise);
     if (size < unknown.min_extent_m || size > unknown.max_extent_m) continue;
     SegmentedDetection entry;
-    entry.observation.segment_C = SegmentPoints(cloud_C, pixels, config.objects.model_voxel_size_m);
+    SetSegment(cloud_C, depth_mm, frame.intrinsics, pixels, config.objects.model_voxel_size_m,
+               &entry.observation);
     if (static_cast<int>(entry.observation.segment_C.size()) < config.min_segment_points) continue;
     entry.observation.keyframe_id = keyframe_id;
     entry.observation.box = {box.x_min * sx, box.y_min * sy, (box.x_max + 1.f) * sx,

@@ -36,9 +36,12 @@ struct SegmentedDetection {
 /// distinct height; and nothing fuses into a surface-class (table) observation. Detections of a
 /// part inside a whole (IsPartOfAnotherDetection) are left out.
 /// `index` is IndexSegments(segmentation, cloud_C), built once per keyframe for this and
-/// UnclassifiedSegments.
+/// UnclassifiedSegments. Observations' points are made from `depth_mm`, the frame's depth as the
+/// keyframe keeps it (DepthMillimetres), with SegmentPointsFromDepth: the store rebuilds them
+/// from the same.
 [[nodiscard]] std::vector<SegmentedDetection> SegmentDetections(
-    const RgbdFrame& frame, const OrganizedCloud& cloud_C, const SegmentationResult& segmentation,
+    const RgbdFrame& frame, const OrganizedCloud& cloud_C,
+    const std::vector<std::uint16_t>& depth_mm, const SegmentationResult& segmentation,
     const SegmentIndex& index, const std::vector<Detection>& detections, KeyframeId keyframe_id,
     const MapperConfig& config);
 
@@ -51,7 +54,8 @@ struct SegmentedDetection {
 /// (dilated) box are parts of what the detector named (a chair's legs, the lower part of a
 /// table) and are left out; so are those that detections claimed a share of.
 [[nodiscard]] std::vector<SegmentedDetection> UnclassifiedSegments(
-    const RgbdFrame& frame, const OrganizedCloud& cloud_C, const SegmentationResult& segmentation,
+    const RgbdFrame& frame, const OrganizedCloud& cloud_C,
+    const std::vector<std::uint16_t>& depth_mm, const SegmentationResult& segmentation,
     const SegmentIndex& index, const std::vector<Detection>& detections,
     const std::vector<SegmentedDetection>& detected, KeyframeId keyframe_id,
     const MapperConfig& config);

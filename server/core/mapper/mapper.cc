@@ -13,7 +13,6 @@
 #include "mapper/mapper_impl.h"
 #include "segmentation/segment_index.h"
 #include "types/organized_cloud.h"
-#include "types/rounding.h"
 
 namespace objmap {
 namespace {
@@ -52,7 +51,7 @@ DepthScanW DepthScanOf(const KeyframeRecord& record) {
   depth.width = record.intrinsics.width;
   depth.height = record.intrinsics.height;
   depth.depth_m.reserve(record.depth_mm.size());
-  for (std::uint16_t mm : record.depth_mm) depth.depth_m.push_back(mm * 0.001f);
+  for (std::uint16_t mm : record.depth_mm) depth.depth_m.push_back(DepthSampleMetres(mm));
   OrganizedCloud cloud_C = BackProject(depth, ColorImage{}, record.intrinsics);
   DepthScanW scan;
   scan.T_W_C = record.T_W_C.cast<float>();
@@ -70,9 +69,7 @@ DepthScanW DepthScanOf(const KeyframeRecord& record) {
 std::vector<std::uint16_t> DepthMillimetres(const DepthImage& depth) {
   std::vector<std::uint16_t> depth_mm(depth.depth_m.size());
   for (std::size_t i = 0; i < depth_mm.size(); ++i) {
-    const float depth_m = depth.depth_m[i];
-    const bool valid = std::isfinite(depth_m) && depth_m > 0.f && depth_m < 65.f;
-    depth_mm[i] = valid ? static_cast<std::uint16_t>(RoundNonNegative(depth_m * 1000.f)) : 0;
+    depth_mm[i] = DepthSampleMillimetres(depth.depth_m[i]);
   }
   return depth_mm;
 }
@@ -88,13 +85,10 @@ KeyframeRecord RecordOf(const RgbdFrame& frame) {
 
 namespace {
 
-KeyframeRecord MakeRecord(const RgbdFrame& frame,
-                          const std::vector<SegmentedDetection>& segmented) {
-  KeyframeRecord record = RecordOf(frame);
+void MarkObjectPixels(const std::vector<SegmentedDetection>& segmented, KeyframeRecord* record) {
   for (const SegmentedDetection& entry : segmented) {
-    for (int i : entry.pixels) record.object_mask[i] = 1;
+    for (int i : entry.pixels) record->object_mask[i] = 1;
   }
-  return record;
 }
 
 // No object took the observation (AssociateKeyframe).
@@ -400,15 +394,18 @@ bool Mapper::AddKeyframe(const RgbdFrame& frame, const std::vector<Detection>& d
   const SegmentationResult segmentation = impl_->segmenter.Segment(cloud_C);
   // Built once: every detection box then costs its own area, not a pass over the image.
   const SegmentIndex index = IndexSegments(segmentation, cloud_C);
-  std::vector<SegmentedDetection> segmented = SegmentDetections(
-      frame, cloud_C, segmentation, index, detections, result->keyframe_id, impl_->config);
+  // The depth as stored: observations' points are made from it, as a restart rebuilds them.
+  KeyframeRecord record = RecordOf(frame);
+  record.session = impl_->session;
+  std::vector<SegmentedDetection> segmented =
+      SegmentDetections(frame, cloud_C, record.depth_mm, segmentation, index, detections,
+                        result->keyframe_id, impl_->config);
   result->detections_used = static_cast<int>(segmented.size());
   // Unclassified segments stay structure in the OctoMap: the record's mask has the named only.
-  KeyframeRecord record = MakeRecord(frame, segmented);
-  record.session = impl_->session;
+  MarkObjectPixels(segmented, &record);
   std::vector<SegmentedDetection> unclassified =
-      UnclassifiedSegments(frame, cloud_C, segmentation, index, detections, segmented,
-                           result->keyframe_id, impl_->config);
+      UnclassifiedSegments(frame, cloud_C, record.depth_mm, segmentation, index, detections,
+                           segmented, result->keyframe_id, impl_->config);
   result->unclassified_segments = static_cast<int>(unclassified.size());
   for (SegmentedDetection& entry : unclassified) segmented.push_back(std::move(entry));
   result->timings.segmentation_ms = MillisecondsSince(start);

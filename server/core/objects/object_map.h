@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "objects/observation_segment.h"
 #include "objects/voxel_model.h"
 #include "types/coco_classes.h"
 #include "types/detection.h"
@@ -27,6 +28,11 @@ struct ObjectObservation {
   /// classes in the same keyframe picked the same segment.
   std::vector<std::pair<int, float>> class_scores;
   ColoredPoints segment_C;  ///< the detection's 3D segment, camera frame, downsampled
+  /// The keyframe's depth pixels segment_C was made from (SegmentPointsFromDepth at
+  /// segment_voxel_size_m, from the keyframe's depth as stored), so the store keeps these
+  /// instead of the points. Empty when the points were made otherwise: the store keeps them.
+  PixelRuns segment_pixels;
+  float segment_voxel_size_m = 0.f;
   /// The independent view of its keyframe (ViewGroupingConfig), >= 0, or -1: a view of its own.
   /// Derived from the keyframe poses (the mapper sets it), not stored.
   std::int64_t view = -1;

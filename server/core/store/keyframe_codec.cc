@@ -1,5 +1,7 @@
 #include "store/keyframe_codec.h"
 
+#include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -251,6 +253,65 @@ bool UnpackColoredPoints(const std::uint8_t* xyz, std::size_t xyz_bytes, const s
   points->colors.resize(rgb_bytes / 3);
   for (std::size_t i = 0; i < points->colors.size(); ++i) {
     std::memcpy(points->colors[i].data(), rgb + 3 * i, 3);
+  }
+  return true;
+}
+
+namespace {
+
+void AppendVarint(std::uint64_t value, Bytes* out) {
+  while (value >= 0x80) {
+    out->push_back(static_cast<std::uint8_t>(value | 0x80));
+    value >>= 7;
+  }
+  out->push_back(static_cast<std::uint8_t>(value));
+}
+
+bool ReadVarint(const std::uint8_t* data, std::size_t bytes, std::size_t* at,
+                std::uint64_t* value) {
+  *value = 0;
+  for (int shift = 0; shift < 64 && *at < bytes; shift += 7) {
+    const std::uint8_t byte = data[(*at)++];
+    *value |= static_cast<std::uint64_t>(byte & 0x7f) << shift;
+    if ((byte & 0x80) == 0) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+Bytes PackSegmentPixels(const PixelRuns& runs, float voxel_size_m, std::size_t point_count) {
+  Bytes out(sizeof(float));
+  std::memcpy(out.data(), &voxel_size_m, sizeof(float));
+  AppendVarint(point_count, &out);
+  std::uint64_t end = 0;
+  for (const PixelRun& run : runs) {
+    AppendVarint(run.start - end, &out);
+    AppendVarint(run.length, &out);
+    end = std::uint64_t{run.start} + run.length;
+  }
+  return out;
+}
+
+bool UnpackSegmentPixels(const std::uint8_t* data, std::size_t bytes, PixelRuns* runs,
+                         float* voxel_size_m, std::size_t* point_count) {
+  runs->clear();
+  if (bytes < sizeof(float)) return false;
+  std::memcpy(voxel_size_m, data, sizeof(float));
+  if (!std::isfinite(*voxel_size_m) || *voxel_size_m <= 0.f) return false;
+  std::size_t at = sizeof(float);
+  std::uint64_t count = 0;
+  if (!ReadVarint(data, bytes, &at, &count)) return false;
+  *point_count = static_cast<std::size_t>(count);
+  std::uint64_t end = 0;
+  while (at < bytes) {
+    std::uint64_t gap = 0, length = 0;
+    if (!ReadVarint(data, bytes, &at, &gap) || !ReadVarint(data, bytes, &at, &length) ||
+        length == 0 || end + gap + length > UINT32_MAX) {
+      return false;
+    }
+    runs->push_back({static_cast<std::uint32_t>(end + gap), static_cast<std::uint32_t>(length)});
+    end += gap + length;
   }
   return true;
 }

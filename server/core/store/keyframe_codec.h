@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "objects/observation_segment.h"
 #include "objects/voxel_model.h"
 #include "types/detection.h"
 #include "types/frame.h"
@@ -56,6 +57,15 @@ using Bytes = std::vector<std::uint8_t>;
 [[nodiscard]] bool UnpackColoredPoints(const std::uint8_t* xyz, std::size_t xyz_bytes,
                                        const std::uint8_t* rgb, std::size_t rgb_bytes,
                                        ColoredPoints* points);
+
+/// An observation's segment as its pixels (ObjectObservation::segment_pixels): the voxel size
+/// (float32), the number of points they make (LEB128), then per run the gap from the previous
+/// run's end and its length (LEB128 each).
+[[nodiscard]] Bytes PackSegmentPixels(const PixelRuns& runs, float voxel_size_m,
+                                      std::size_t point_count);
+/// False when the blob is cut short, has bytes left over, or its runs overlap or overflow.
+[[nodiscard]] bool UnpackSegmentPixels(const std::uint8_t* data, std::size_t bytes, PixelRuns* runs,
+                                       float* voxel_size_m, std::size_t* point_count);
 
 }  // namespace store_internal
 }  // namespace objmap

@@ -167,7 +167,8 @@ KeyframeStore::KeyframeBytes KeyframeStore::BytesOf(KeyframeId id) const {
       " length(T_W_C) + length(detections) FROM keyframes WHERE id = ?",
       "keyframe sizes", &why);
   auto observations = reader.get()->Prepare(
-      "SELECT ifnull(sum(length(class_scores) + length(points) + length(colors)), 0)"
+      "SELECT ifnull(sum(length(class_scores) + length(points) + length(colors) +"
+      " length(pixels)), 0)"
       " FROM observations WHERE keyframe_id = ?",
       "observation sizes", &why);
   bool has_row = false;

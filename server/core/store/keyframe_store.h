@@ -216,8 +216,9 @@ class KeyframeStore {
 
   [[nodiscard]] const std::string& path() const;
   /// 2 added the occupancy checkpoint, 3 the sessions (a database without them opens with its
-  /// keyframes in session 1), 4 the revisits; older files are migrated when opened.
-  static constexpr int kSchemaVersion = 4;
+  /// keyframes in session 1), 4 the revisits, 5 observations kept as their pixels; older files
+  /// are migrated when opened.
+  static constexpr int kSchemaVersion = 5;
 
  private:
   KeyframeStore();

@@ -193,15 +193,28 @@ bool InsertRevisit(Connection* db, const StoredRevisit& r, std::string* why) {
   return false;
 }
 
+// An observation whose points its pixels rebuild (ObjectObservation::segment_pixels).
+bool IsKeptAsPixels(const ObjectObservation& observation) {
+  return !observation.segment_pixels.empty() && observation.segment_voxel_size_m > 0.f &&
+         std::isfinite(observation.segment_voxel_size_m) && !observation.segment_C.empty();
+}
+
 bool InsertObservation(Connection* db, const StoredObservation& o, std::string* why) {
   const ObjectObservation& obs = o.observation;
   auto insert = db->Prepare(
       "INSERT INTO observations(object_id, keyframe_id, box_x_min, box_y_min, box_x_max,"
-      " box_y_max, class_scores, points, colors) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
+      " box_y_max, class_scores, points, colors, pixels) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
       "insert observation of object " + std::to_string(o.object_id), why);
   if (!insert) return false;
   const Bytes scores = store_internal::PackClassScores(obs.class_scores);
-  const Bytes points = store_internal::PackPoints(obs.segment_C);
+  // Points made from the keyframe's stored depth are rebuilt from it (LoadAll): their pixels
+  // are kept instead. Their colours stay: the stored colour image is lossy.
+  const bool as_pixels = IsKeptAsPixels(obs);
+  const Bytes points = as_pixels ? Bytes{} : store_internal::PackPoints(obs.segment_C);
+  const Bytes pixels = as_pixels
+                           ? store_internal::PackSegmentPixels(
+                                 obs.segment_pixels, obs.segment_voxel_size_m, obs.segment_C.size())
+                           : Bytes{};
   const Bytes colors = store_internal::PackColors(obs.segment_C);
   insert->Bind(1, std::int64_t{o.object_id}).Bind(2, std::int64_t{obs.keyframe_id});
   insert->Bind(3, double{obs.box.x_min}).Bind(4, double{obs.box.y_min});
@@ -209,6 +222,7 @@ bool InsertObservation(Connection* db, const StoredObservation& o, std::string* 
   insert->BindBlob(7, scores.data(), scores.size());
   insert->BindBlob(8, points.data(), points.size());
   insert->BindBlob(9, colors.data(), colors.size());
+  insert->BindBlob(10, pixels.data(), pixels.size());
   if (insert->Run(why)) return true;
   if (insert->error_code() == SQLITE_CONSTRAINT_FOREIGNKEY) {
     *why = "observation of object " + std::to_string(o.object_id) + ": unknown keyframe id " +

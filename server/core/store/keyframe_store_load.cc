@@ -2,7 +2,9 @@
 // consistent snapshot while Commit goes on), images decoded afterwards, in parallel.
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
+#include <map>
 #include <thread>
 
 #include "store/keyframe_codec.h"
@@ -82,8 +84,48 @@ bool DecodeImages(RawKeyframe* raw, std::string* why) {
   return ok;
 }
 
-// PNG decoding dominates a restart; keyframes are independent, so they decode on all cores.
-bool DecodeAll(std::vector<RawKeyframe>* raws, std::string* why) {
+// The points of observations kept as pixels, from their keyframe's decoded depth: the function
+// that made them (SegmentPointsFromDepth) on the same millimetres. Their number must be the
+// one stored; colours were read with the row.
+bool RebuildSegment(const StoredKeyframe& keyframe, ObjectObservation* observation,
+                    std::string* why) {
+  const std::size_t expected = observation->segment_C.points.size();
+  ColoredPoints rebuilt =
+      SegmentPointsFromDepth(keyframe.depth_mm, keyframe.intrinsics, observation->segment_pixels,
+                             observation->segment_voxel_size_m, nullptr);
+  if (rebuilt.size() != expected) {
+    *why = "observation in keyframe " + std::to_string(keyframe.id) + ": its pixels make " +
+           std::to_string(rebuilt.size()) + " points of the keyframe's depth, " +
+           std::to_string(expected) + " were stored";
+    return false;
+  }
+  observation->segment_C.points = std::move(rebuilt.points);
+  return true;
+}
+
+// PNG decoding dominates a restart; keyframes are independent, so they decode on all cores,
+// each followed by the observations kept as its pixels.
+bool DecodeAll(std::vector<RawKeyframe>* raws, std::vector<StoredObservation>* observations,
+               std::string* why) {
+  std::map<KeyframeId, std::size_t> index_of;
+  for (std::size_t i = 0; i < raws->size(); ++i) index_of[(*raws)[i].keyframe.id] = i;
+  std::vector<std::vector<ObjectObservation*>> kept_as_pixels(raws->size());
+  for (StoredObservation& o : *observations) {
+    if (o.observation.segment_pixels.empty()) continue;
+    const auto found = index_of.find(o.observation.keyframe_id);
+    if (found == index_of.end()) {
+      *why = "observation of object " + std::to_string(o.object_id) + ": unknown keyframe " +
+             std::to_string(o.observation.keyframe_id);
+      return false;
+    }
+    kept_as_pixels[found->second].push_back(&o.observation);
+  }
+  auto decode = [&](std::size_t i, std::string* error) {
+    if (!DecodeImages(&(*raws)[i], error)) return;
+    for (ObjectObservation* observation : kept_as_pixels[i]) {
+      if (!RebuildSegment((*raws)[i].keyframe, observation, error)) return;
+    }
+  };
   const std::size_t threads = std::max<std::size_t>(
       1, std::min<std::size_t>({std::thread::hardware_concurrency(), 8, raws->size() / 4}));
   std::vector<std::string> errors(threads);
@@ -91,7 +133,7 @@ bool DecodeAll(std::vector<RawKeyframe>* raws, std::string* why) {
   for (std::size_t t = 0; t < threads; ++t) {
     workers.emplace_back([&, t] {
       for (std::size_t i = t; i < raws->size() && errors[t].empty(); i += threads) {
-        DecodeImages(&(*raws)[i], &errors[t]);
+        decode(i, &errors[t]);
       }
     });
   }
@@ -120,7 +162,7 @@ bool ReadObservations(Connection* db, std::vector<StoredObservation>* observatio
                       std::string* why) {
   auto rows = db->Prepare(
       "SELECT object_id, keyframe_id, box_x_min, box_y_min, box_x_max, box_y_max, class_scores,"
-      " points, colors FROM observations ORDER BY object_id, keyframe_id, id",
+      " points, colors, pixels FROM observations ORDER BY object_id, keyframe_id, id",
       "load observations", why);
   if (!rows) return false;
   for (bool has_row = true;;) {
@@ -132,12 +174,29 @@ bool ReadObservations(Connection* db, std::vector<StoredObservation>* observatio
     obs.keyframe_id = rows->Int64(1);
     obs.box = {static_cast<float>(rows->Double(2)), static_cast<float>(rows->Double(3)),
                static_cast<float>(rows->Double(4)), static_cast<float>(rows->Double(5))};
-    std::size_t score_bytes = 0, xyz_bytes = 0, rgb_bytes = 0;
+    std::size_t score_bytes = 0, xyz_bytes = 0, rgb_bytes = 0, pixel_bytes = 0;
     const std::uint8_t* scores = rows->Blob(6, &score_bytes);
     const std::uint8_t* xyz = rows->Blob(7, &xyz_bytes);
     const std::uint8_t* rgb = rows->Blob(8, &rgb_bytes);
-    if (!store_internal::UnpackClassScores(scores, score_bytes, &obs.class_scores) ||
-        !store_internal::UnpackColoredPoints(xyz, xyz_bytes, rgb, rgb_bytes, &obs.segment_C)) {
+    const std::uint8_t* pixels = rows->Blob(9, &pixel_bytes);
+    bool ok = store_internal::UnpackClassScores(scores, score_bytes, &obs.class_scores);
+    if (ok && pixel_bytes == 0) {
+      ok = store_internal::UnpackColoredPoints(xyz, xyz_bytes, rgb, rgb_bytes, &obs.segment_C);
+    } else if (ok) {
+      // Kept as pixels: the colours now, the points once the keyframe's depth is decoded
+      // (RebuildSegments).
+      std::size_t points = 0;
+      ok = xyz_bytes == 0 &&
+           store_internal::UnpackSegmentPixels(pixels, pixel_bytes, &obs.segment_pixels,
+                                               &obs.segment_voxel_size_m, &points) &&
+           !obs.segment_pixels.empty() && (rgb_bytes == 0 || rgb_bytes == 3 * points);
+      if (ok) {
+        obs.segment_C.points.assign(points, Eigen::Vector3f::Constant(NAN));
+        obs.segment_C.colors.resize(rgb_bytes / 3);
+        std::memcpy(obs.segment_C.colors.data(), rgb, rgb_bytes);
+      }
+    }
+    if (!ok) {
       *why = "observation of object " + std::to_string(o.object_id) + " in keyframe " +
              std::to_string(obs.keyframe_id) + ": corrupt blob";
       return false;
@@ -190,7 +249,7 @@ bool KeyframeStore::LoadAll(StoredMap* map, std::string* why) const {
   if (!db->Exec("BEGIN", &reason) || !ReadMeta(db, map, &reason) ||
       !ReadKeyframes(db, &raws, &reason) || !ReadObservations(db, &map->observations, &reason) ||
       !ReadObjects(db, &map->objects, &reason) || !db->Exec("COMMIT", &reason) ||
-      !DecodeAll(&raws, &reason)) {
+      !DecodeAll(&raws, &map->observations, &reason)) {
     *why = impl_->path + ": " + reason;
     *map = StoredMap{};
     return false;
