@@ -395,6 +395,47 @@ TEST_F(Relocalisation, KeyframesBeforeASessionIsPlacedAreHeldThenMapped) {
   }
 }
 
+// At most server.max_held_keyframes are held: beyond it the oldest go, and the refusal that
+// dropped one names it; the placement maps those still held.
+TEST_F(Relocalisation, HeldKeyframesBeyondTheLimitAreNamedWhenDropped) {
+  if (!OpenSequenceOrSkip()) GTEST_SKIP() << "SKIPPED: ../shared/data/redkitchen is absent";
+  {
+    auto server = OpenServer();
+    ASSERT_TRUE(server);
+    MapFrames(server.get(), 250, 350, 5);
+  }
+  config_.max_held_keyframes = 2;
+  auto server = OpenServer();
+  ASSERT_TRUE(server);
+  std::vector<std::string> held_names;
+  std::size_t named_dropped = 0;
+  for (std::size_t index = 640; index >= 540; index -= 10) {
+    AddKeyframeOutcome outcome;
+    const RgbdFrame frame = Frame(index);
+    const ServiceStatus status = server->AddKeyframe(frame, std::vector<Detection>{}, &outcome);
+    if (status.ok()) {
+      // Only the last two held are mapped with it.
+      EXPECT_EQ(outcome.attached.size(), std::min<std::size_t>(held_names.size(), 2));
+      break;
+    }
+    ASSERT_TRUE(outcome.held) << status.message;
+    if (held_names.size() >= 2) {
+      const std::string& dropped = held_names[held_names.size() - 2];
+      EXPECT_NE(status.message.find("max_held_keyframes (2) the oldest held keyframe was "
+                                    "dropped, never to be mapped: " +
+                                    dropped),
+                std::string::npos)
+          << status.message;
+      ++named_dropped;
+    } else {
+      EXPECT_EQ(status.message.find("dropped"), std::string::npos) << status.message;
+    }
+    held_names.push_back(frame.name);
+  }
+  ASSERT_GE(held_names.size(), 3u) << "the session was placed too soon to drop any";
+  EXPECT_EQ(named_dropped, held_names.size() - 2);
+}
+
 // Starts the map cannot explain (views of other parts of the kitchen than the map's) are refused
 // with the reason and map nothing; a start that is placed is placed right.
 TEST_F(Relocalisation, AStartTheMapCannotExplainIsRefusedNeverPlacedWrongly) {

@@ -88,18 +88,28 @@ ServiceStatus MapServer::AddKeyframe(RgbdFrame frame,
     job->session = impl_->session;
   }
   if (impl_->odometry && tracked.status == TrackingStatus::kProvisional) {
-    (void)impl_->held_keyframes.Hold(job, tracked, *impl_->odometry,
-                                     static_cast<std::size_t>(impl_->config.max_held_keyframes));
+    const auto dropped = impl_->held_keyframes.Hold(
+        job, tracked, *impl_->odometry, static_cast<std::size_t>(impl_->config.max_held_keyframes));
     const std::size_t held = impl_->held_keyframes.In(tracked.fragment);
     *outcome = AddKeyframeOutcome{};
     outcome->untracked = true;
     outcome->held = true;
     outcome->held_fragment = tracked.fragment;
+    // The client learns which of the keyframes it sent will never be mapped.
+    std::string dropped_note;
+    if (!dropped.empty()) {
+      dropped_note = "; beyond server.max_held_keyframes (" +
+                     std::to_string(impl_->config.max_held_keyframes) + ") the oldest held " +
+                     (dropped.size() == 1 ? "keyframe was" : "keyframes were") +
+                     " dropped, never to be mapped:";
+      for (const auto& old : dropped) dropped_note += " " + old.payload->frame.name;
+    }
     return {StatusCode::kFailedPrecondition,
             name + ": not placed in the map yet (" + tracked.why + "); held in provisional part " +
                 std::to_string(tracked.fragment) + " of the session (" + std::to_string(held) +
                 " keyframes), in memory only: mapped at their poses once one of them is placed, "
-                "lost if the server stops or a new session starts first"};
+                "lost if the server stops or a new session starts first" +
+                dropped_note};
   }
   std::vector<KeyframeId> attached;
   if (impl_->odometry && tracked.attached_fragment > 0) {
