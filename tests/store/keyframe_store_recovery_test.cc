@@ -140,9 +140,7 @@ TEST_F(KeyframeStoreRecoveryTest, ObservationPixelsThatDoNotMakeItsPointsAreRepo
     hex += digits[byte >> 4];
     hex += digits[byte & 15];
   }
-  // The colours of one more point too, so that only the pixels disagree.
-  RunSql(Path(), "UPDATE observations SET pixels = X'" + hex +
-                     "', colors = colors || X'000000' WHERE object_id = 4");
+  RunSql(Path(), "UPDATE observations SET pixels = X'" + hex + "' WHERE object_id = 4");
   {
     auto store = OpenStore(Path());
     ASSERT_NE(store, nullptr);
@@ -152,6 +150,27 @@ TEST_F(KeyframeStoreRecoveryTest, ObservationPixelsThatDoNotMakeItsPointsAreRepo
     EXPECT_NE(why.find("observation in keyframe 1: its pixels make " +
                        std::to_string(o.segment_C.size()) + " points of the keyframe's depth, " +
                        std::to_string(o.segment_C.size() + 1) + " were stored"),
+              std::string::npos)
+        << why;
+  }
+  // Colours that are not the PNG of as many colours as points.
+  const auto pixels = store_internal::PackSegmentPixels(o.segment_pixels, o.segment_voxel_size_m,
+                                                        o.segment_C.size());
+  hex.clear();
+  for (std::uint8_t byte : pixels) {
+    const char digits[] = "0123456789ABCDEF";
+    hex += digits[byte >> 4];
+    hex += digits[byte & 15];
+  }
+  RunSql(Path(), "UPDATE observations SET pixels = X'" + hex +
+                     "', colors = X'0102030405' WHERE object_id = 4");
+  {
+    auto store = OpenStore(Path());
+    ASSERT_NE(store, nullptr);
+    StoredMap map;
+    std::string why;
+    EXPECT_FALSE(store->LoadAll(&map, &why));
+    EXPECT_NE(why.find("observation in keyframe 1: colours: image blob is not a PNG image"),
               std::string::npos)
         << why;
   }

@@ -1,5 +1,6 @@
 #include "store/keyframe_codec.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -163,6 +164,41 @@ bool DecodeColorJpeg(const std::uint8_t* jpeg, std::size_t bytes, int width, int
     SwapRedBlue(bgr.ptr(v), color->rgb.data() + static_cast<std::size_t>(v) * width * 3,
                 static_cast<std::size_t>(width) * 3);
   }
+  return true;
+}
+
+static_assert(sizeof(std::array<std::uint8_t, 3>) == 3, "colours are packed 3 bytes each");
+
+bool EncodeSegmentColorsPng(const std::vector<std::array<std::uint8_t, 3>>& colors, Bytes* png,
+                            std::string* why) {
+  png->clear();
+  if (colors.empty()) return true;
+  const std::size_t width = std::min(colors.size(), kSegmentColorsPerRow);
+  const std::size_t height = (colors.size() + width - 1) / width;
+  // The channels go in as they are: the decoder gives them back in the same order.
+  cv::Mat image(static_cast<int>(height), static_cast<int>(width), CV_8UC3, cv::Scalar::all(0));
+  std::memcpy(image.data, colors.data(), colors.size() * 3);
+  return EncodePng(image, png, why);
+}
+
+bool DecodeSegmentColorsPng(const std::uint8_t* png, std::size_t bytes, std::size_t count,
+                            std::vector<std::array<std::uint8_t, 3>>* colors, std::string* why) {
+  colors->clear();
+  if (count == 0 || bytes == 0) {
+    if (count == bytes) return true;
+    *why = "segment colours: " + std::to_string(bytes) + " bytes for " + std::to_string(count) +
+           " colours";
+    return false;
+  }
+  const std::size_t width = std::min(count, kSegmentColorsPerRow);
+  const std::size_t height = (count + width - 1) / width;
+  cv::Mat image;
+  if (!DecodeImage(png, bytes, BlobFormat::kPng, cv::IMREAD_UNCHANGED, CV_8UC3,
+                   static_cast<int>(width), static_cast<int>(height), &image, why)) {
+    return false;
+  }
+  colors->resize(count);
+  std::memcpy(colors->data(), image.data, count * 3);  // continuous: decoded whole
   return true;
 }
 

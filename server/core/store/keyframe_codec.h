@@ -66,6 +66,17 @@ using Bytes = std::vector<std::uint8_t>;
 /// False when the blob is cut short, has bytes left over, or its runs overlap or overflow.
 [[nodiscard]] bool UnpackSegmentPixels(const std::uint8_t* data, std::size_t bytes, PixelRuns* runs,
                                        float* voxel_size_m, std::size_t* point_count);
+/// The colours of a segment kept as pixels, losslessly: an 8-bit three-channel PNG of up to
+/// kSegmentColorsPerRow colours a row, the last row padded with black (neighbouring points have
+/// about the same colour: PNG's filters and deflate take it to about a third). Empty: none.
+inline constexpr std::size_t kSegmentColorsPerRow = 16384;
+[[nodiscard]] bool EncodeSegmentColorsPng(const std::vector<std::array<std::uint8_t, 3>>& colors,
+                                          Bytes* png, std::string* why);
+/// `count` colours; a blob of another size is refused.
+[[nodiscard]] bool DecodeSegmentColorsPng(const std::uint8_t* png, std::size_t bytes,
+                                          std::size_t count,
+                                          std::vector<std::array<std::uint8_t, 3>>* colors,
+                                          std::string* why);
 
 }  // namespace store_internal
 }  // namespace objmap

@@ -208,14 +208,20 @@ bool InsertObservation(Connection* db, const StoredObservation& o, std::string* 
   if (!insert) return false;
   const Bytes scores = store_internal::PackClassScores(obs.class_scores);
   // Points made from the keyframe's stored depth are rebuilt from it (LoadAll): their pixels
-  // are kept instead. Their colours stay: the stored colour image is lossy.
+  // are kept instead. Their colours stay (the stored colour image is lossy), as a PNG.
   const bool as_pixels = IsKeptAsPixels(obs);
   const Bytes points = as_pixels ? Bytes{} : store_internal::PackPoints(obs.segment_C);
   const Bytes pixels = as_pixels
                            ? store_internal::PackSegmentPixels(
                                  obs.segment_pixels, obs.segment_voxel_size_m, obs.segment_C.size())
                            : Bytes{};
-  const Bytes colors = store_internal::PackColors(obs.segment_C);
+  Bytes colors;
+  if (!as_pixels) {
+    colors = store_internal::PackColors(obs.segment_C);
+  } else if (!store_internal::EncodeSegmentColorsPng(obs.segment_C.colors, &colors, why)) {
+    *why = "observation of object " + std::to_string(o.object_id) + ": " + *why;
+    return false;
+  }
   insert->Bind(1, std::int64_t{o.object_id}).Bind(2, std::int64_t{obs.keyframe_id});
   insert->Bind(3, double{obs.box.x_min}).Bind(4, double{obs.box.y_min});
   insert->Bind(5, double{obs.box.x_max}).Bind(6, double{obs.box.y_max});

@@ -22,6 +22,14 @@ const char kSelectKeyframes[] =
     "SELECT id, stamp_s, name, T_W_C, width, height, fx, fy, cx, cy, depth_png, mask_png,"
     " color_jpeg, detections, session_id FROM keyframes";
 
+// An observation kept as pixels, read but not yet whole: its points are rebuilt and its colours
+// decoded once its keyframe's depth is decoded (DecodeAll).
+struct PendingSegment {
+  std::size_t observation = 0;  ///< index into StoredMap::observations
+  std::size_t points = 0;
+  Bytes colors_png;
+};
+
 /// A keyframe row whose images are not decoded yet.
 struct RawKeyframe {
   StoredKeyframe keyframe;
@@ -84,21 +92,29 @@ bool DecodeImages(RawKeyframe* raw, std::string* why) {
   return ok;
 }
 
-// The points of observations kept as pixels, from their keyframe's decoded depth: the function
-// that made them (SegmentPointsFromDepth) on the same millimetres. Their number must be the
-// one stored; colours were read with the row.
-bool RebuildSegment(const StoredKeyframe& keyframe, ObjectObservation* observation,
-                    std::string* why) {
-  const std::size_t expected = observation->segment_C.points.size();
+// The points of an observation kept as pixels, from its keyframe's decoded depth: the function
+// that made them (SegmentPointsFromDepth) on the same millimetres; their number must be the one
+// stored. And its colours.
+bool CompleteSegment(const StoredKeyframe& keyframe, PendingSegment* pending,
+                     ObjectObservation* observation, std::string* why) {
   ColoredPoints rebuilt =
       SegmentPointsFromDepth(keyframe.depth_mm, keyframe.intrinsics, observation->segment_pixels,
                              observation->segment_voxel_size_m, nullptr);
-  if (rebuilt.size() != expected) {
-    *why = "observation in keyframe " + std::to_string(keyframe.id) + ": its pixels make " +
-           std::to_string(rebuilt.size()) + " points of the keyframe's depth, " +
-           std::to_string(expected) + " were stored";
+  const std::string label = "observation in keyframe " + std::to_string(keyframe.id) + ": ";
+  if (rebuilt.size() != pending->points) {
+    *why = label + "its pixels make " + std::to_string(rebuilt.size()) +
+           " points of the keyframe's depth, " + std::to_string(pending->points) + " were stored";
     return false;
   }
+  std::string reason;
+  const std::size_t colors = pending->colors_png.empty() ? 0 : pending->points;
+  if (!store_internal::DecodeSegmentColorsPng(pending->colors_png.data(),
+                                              pending->colors_png.size(), colors,
+                                              &observation->segment_C.colors, &reason)) {
+    *why = label + "colours: " + reason;
+    return false;
+  }
+  Bytes().swap(pending->colors_png);
   observation->segment_C.points = std::move(rebuilt.points);
   return true;
 }
@@ -106,24 +122,27 @@ bool RebuildSegment(const StoredKeyframe& keyframe, ObjectObservation* observati
 // PNG decoding dominates a restart; keyframes are independent, so they decode on all cores,
 // each followed by the observations kept as its pixels.
 bool DecodeAll(std::vector<RawKeyframe>* raws, std::vector<StoredObservation>* observations,
-               std::string* why) {
+               std::vector<PendingSegment>* pending, std::string* why) {
   std::map<KeyframeId, std::size_t> index_of;
   for (std::size_t i = 0; i < raws->size(); ++i) index_of[(*raws)[i].keyframe.id] = i;
-  std::vector<std::vector<ObjectObservation*>> kept_as_pixels(raws->size());
-  for (StoredObservation& o : *observations) {
-    if (o.observation.segment_pixels.empty()) continue;
+  std::vector<std::vector<PendingSegment*>> of_keyframe(raws->size());
+  for (PendingSegment& segment : *pending) {
+    const StoredObservation& o = (*observations)[segment.observation];
     const auto found = index_of.find(o.observation.keyframe_id);
     if (found == index_of.end()) {
       *why = "observation of object " + std::to_string(o.object_id) + ": unknown keyframe " +
              std::to_string(o.observation.keyframe_id);
       return false;
     }
-    kept_as_pixels[found->second].push_back(&o.observation);
+    of_keyframe[found->second].push_back(&segment);
   }
   auto decode = [&](std::size_t i, std::string* error) {
     if (!DecodeImages(&(*raws)[i], error)) return;
-    for (ObjectObservation* observation : kept_as_pixels[i]) {
-      if (!RebuildSegment((*raws)[i].keyframe, observation, error)) return;
+    for (PendingSegment* segment : of_keyframe[i]) {
+      if (!CompleteSegment((*raws)[i].keyframe, segment,
+                           &(*observations)[segment->observation].observation, error)) {
+        return;
+      }
     }
   };
   const std::size_t threads = std::max<std::size_t>(
@@ -159,7 +178,7 @@ bool ReadKeyframes(Connection* db, std::vector<RawKeyframe>* raws, std::string* 
 }
 
 bool ReadObservations(Connection* db, std::vector<StoredObservation>* observations,
-                      std::string* why) {
+                      std::vector<PendingSegment>* pending, std::string* why) {
   auto rows = db->Prepare(
       "SELECT object_id, keyframe_id, box_x_min, box_y_min, box_x_max, box_y_max, class_scores,"
       " points, colors, pixels FROM observations ORDER BY object_id, keyframe_id, id",
@@ -183,18 +202,14 @@ bool ReadObservations(Connection* db, std::vector<StoredObservation>* observatio
     if (ok && pixel_bytes == 0) {
       ok = store_internal::UnpackColoredPoints(xyz, xyz_bytes, rgb, rgb_bytes, &obs.segment_C);
     } else if (ok) {
-      // Kept as pixels: the colours now, the points once the keyframe's depth is decoded
-      // (RebuildSegments).
-      std::size_t points = 0;
+      PendingSegment segment;
+      segment.observation = observations->size() - 1;
       ok = xyz_bytes == 0 &&
            store_internal::UnpackSegmentPixels(pixels, pixel_bytes, &obs.segment_pixels,
-                                               &obs.segment_voxel_size_m, &points) &&
-           !obs.segment_pixels.empty() && (rgb_bytes == 0 || rgb_bytes == 3 * points);
-      if (ok) {
-        obs.segment_C.points.assign(points, Eigen::Vector3f::Constant(NAN));
-        obs.segment_C.colors.resize(rgb_bytes / 3);
-        std::memcpy(obs.segment_C.colors.data(), rgb, rgb_bytes);
-      }
+                                               &obs.segment_voxel_size_m, &segment.points) &&
+           !obs.segment_pixels.empty();
+      segment.colors_png.assign(rgb, rgb + rgb_bytes);
+      pending->push_back(std::move(segment));
     }
     if (!ok) {
       *why = "observation of object " + std::to_string(o.object_id) + " in keyframe " +
@@ -244,12 +259,14 @@ bool KeyframeStore::LoadAll(StoredMap* map, std::string* why) const {
   Connection* db = reader.get();
   *map = StoredMap{};
   std::vector<RawKeyframe> raws;
+  std::vector<PendingSegment> pending;
   std::string reason;
   // The lease rolls the read transaction back when it returns the connection.
   if (!db->Exec("BEGIN", &reason) || !ReadMeta(db, map, &reason) ||
-      !ReadKeyframes(db, &raws, &reason) || !ReadObservations(db, &map->observations, &reason) ||
+      !ReadKeyframes(db, &raws, &reason) ||
+      !ReadObservations(db, &map->observations, &pending, &reason) ||
       !ReadObjects(db, &map->objects, &reason) || !db->Exec("COMMIT", &reason) ||
-      !DecodeAll(&raws, &map->observations, &reason)) {
+      !DecodeAll(&raws, &map->observations, &pending, &reason)) {
     *why = impl_->path + ": " + reason;
     *map = StoredMap{};
     return false;
