@@ -524,6 +524,7 @@ int main(int argc, char** argv) {
   const fs::path points_db = db.string() + ".points";
   fs::copy_file(db, points_db, fs::copy_options::overwrite_existing);
   std::size_t observations_as_pixels = 0;
+  const double in_file = static_cast<double>(std::max<std::size_t>(1, status.keyframes));
   {
     std::unique_ptr<KeyframeStore> copy =
         KeyframeStore::Open(points_db.string(), KeyframeStoreConfig{}, &why);
@@ -559,9 +560,11 @@ int main(int argc, char** argv) {
     sqlite3_close(raw);
     std::printf(
         "\nObservations (%zu of them made from their keyframe's depth), both files vacuumed: "
-        "kept as points %.1f MB, as pixels %.1f MB (%.0f / %.0f kB per keyframe)\n",
+        "kept as points %.1f MB, as pixels %.1f MB (%.0f / %.0f kB per keyframe of the %zu "
+        "in the file)\n",
         observations_as_pixels, fs::file_size(points_db) / 1e6, fs::file_size(vacuumed) / 1e6,
-        fs::file_size(points_db) / n / 1e3, fs::file_size(vacuumed) / n / 1e3);
+        fs::file_size(points_db) / in_file / 1e3, fs::file_size(vacuumed) / in_file / 1e3,
+        status.keyframes);
     fs::remove(vacuumed);
   }
   auto restart = [&](const fs::path& file, int checkpoint_every) {
