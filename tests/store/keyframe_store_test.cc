@@ -204,6 +204,32 @@ TEST(KeyframeCodec, AnImageBlobOfAnotherSizeIsRefusedByItsHeader) {
 }
 
 // The database holds the camera's images: it and its WAL are readable by the owner only.
+// An observation's pixels round-trip; a blob whose runs overlap, are empty or run past 2^32
+// pixels (a gap that would wrap the sum around) is refused.
+TEST(KeyframeCodec, SegmentPixelsRoundTripAndBadRunsAreRefused) {
+  const PixelRuns runs = {{5, 3}, {100, 640}, {70000, 1}};
+  const auto blob = store_internal::PackSegmentPixels(runs, 0.005f, 321);
+  PixelRuns back;
+  float voxel = 0.f;
+  std::size_t points = 0;
+  ASSERT_TRUE(
+      store_internal::UnpackSegmentPixels(blob.data(), blob.size(), &back, &voxel, &points));
+  EXPECT_EQ(back, runs);
+  EXPECT_EQ(voxel, 0.005f);
+  EXPECT_EQ(points, 321u);
+  std::vector<std::uint8_t> bad(blob.begin(), blob.begin() + 5);  // voxel size, count 321 ...
+  bad.insert(bad.end(), {0x05, 0x00});                            // ... a run of length 0
+  EXPECT_FALSE(store_internal::UnpackSegmentPixels(bad.data(), bad.size(), &back, &voxel, &points));
+  bad.resize(5);
+  // A gap of 2^64 - 1 after a run ending at pixel 1 would wrap around to a run at pixel 0.
+  bad.insert(bad.end(), {0x00, 0x01});
+  for (int i = 0; i < 9; ++i) bad.push_back(0xff);
+  bad.insert(bad.end(), {0x01, 0x01});
+  EXPECT_FALSE(store_internal::UnpackSegmentPixels(bad.data(), bad.size(), &back, &voxel, &points));
+  std::vector<std::uint8_t> cut(blob.begin(), blob.end() - 1);  // the last length cut off
+  EXPECT_FALSE(store_internal::UnpackSegmentPixels(cut.data(), cut.size(), &back, &voxel, &points));
+}
+
 TEST_F(KeyframeStoreTest, DatabaseFilesAreCreatedOwnerOnly) {
   auto store = OpenStore(Path());
   ASSERT_NE(store, nullptr);

@@ -343,7 +343,7 @@ bool UnpackSegmentPixels(const std::uint8_t* data, std::size_t bytes, PixelRuns*
   while (at < bytes) {
     std::uint64_t gap = 0, length = 0;
     if (!ReadVarint(data, bytes, &at, &gap) || !ReadVarint(data, bytes, &at, &length) ||
-        length == 0 || end + gap + length > UINT32_MAX) {
+        length == 0 || gap > UINT32_MAX || length > UINT32_MAX || end + gap + length > UINT32_MAX) {
       return false;
     }
     runs->push_back({static_cast<std::uint32_t>(end + gap), static_cast<std::uint32_t>(length)});
