@@ -66,6 +66,17 @@ class KeyframeStoreRecoveryTest : public testing::StoreTest {
     EXPECT_NE(why.find(expected), std::string::npos) << why;
   }
 
+  // `bytes` as an SQL blob literal's hex digits.
+  static std::string Hex(const std::vector<std::uint8_t>& bytes) {
+    const char digits[] = "0123456789ABCDEF";
+    std::string hex;
+    for (std::uint8_t byte : bytes) {
+      hex += digits[byte >> 4];
+      hex += digits[byte & 15];
+    }
+    return hex;
+  }
+
   // Overwrites `bytes` bytes at `offset` with pseudo-random garbage.
   void WriteGarbage(const std::string& path, std::size_t offset, std::size_t bytes) {
     std::fstream file(path, std::ios::in | std::ios::out | std::ios::binary);
@@ -134,13 +145,7 @@ TEST_F(KeyframeStoreRecoveryTest, ObservationPixelsThatDoNotMakeItsPointsAreRepo
   const ObjectObservation& o = observation.observation;
   const auto blob = store_internal::PackSegmentPixels(o.segment_pixels, o.segment_voxel_size_m,
                                                       o.segment_C.size() + 1);
-  std::string hex;
-  for (std::uint8_t byte : blob) {
-    const char digits[] = "0123456789ABCDEF";
-    hex += digits[byte >> 4];
-    hex += digits[byte & 15];
-  }
-  RunSql(Path(), "UPDATE observations SET pixels = X'" + hex + "' WHERE object_id = 4");
+  RunSql(Path(), "UPDATE observations SET pixels = X'" + Hex(blob) + "' WHERE object_id = 4");
   {
     auto store = OpenStore(Path());
     ASSERT_NE(store, nullptr);
@@ -156,13 +161,7 @@ TEST_F(KeyframeStoreRecoveryTest, ObservationPixelsThatDoNotMakeItsPointsAreRepo
   // Colours that are not the PNG of as many colours as points.
   const auto pixels = store_internal::PackSegmentPixels(o.segment_pixels, o.segment_voxel_size_m,
                                                         o.segment_C.size());
-  hex.clear();
-  for (std::uint8_t byte : pixels) {
-    const char digits[] = "0123456789ABCDEF";
-    hex += digits[byte >> 4];
-    hex += digits[byte & 15];
-  }
-  RunSql(Path(), "UPDATE observations SET pixels = X'" + hex +
+  RunSql(Path(), "UPDATE observations SET pixels = X'" + Hex(pixels) +
                      "', colors = X'0102030405' WHERE object_id = 4");
   {
     auto store = OpenStore(Path());

@@ -5,6 +5,7 @@
 #include <map>
 
 #include "mapper/mapper.h"
+#include "objects/observation_segment.h"
 
 namespace objmap {
 
@@ -198,7 +199,7 @@ ViewCoverage CoverageOf(const DepthImage& depth, const CameraIntrinsics& intrins
         const std::uint16_t measured =
             (*view.depth_mm)[static_cast<std::size_t>(row) * k.width + col];
         if (measured == 0) continue;
-        const float z_view = 0.001f * measured;
+        const float z_view = DepthSampleMetres(measured);
         const Eigen::Vector3d q_view((col - k.cx) * z_view / k.fx, (row - k.cy) * z_view / k.fy,
                                      z_view);
         int new_col = 0, new_row = 0;

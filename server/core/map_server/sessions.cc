@@ -6,6 +6,7 @@
 
 #include "map_server/map_server.h"
 #include "map_server/map_server_impl.h"
+#include "objects/observation_segment.h"
 
 namespace objmap {
 namespace {
@@ -188,7 +189,8 @@ ServiceStatus MapServer::StoredFrame(KeyframeId id, RgbdFrame* frame) const {
   frame->depth.width = stored.intrinsics.width;
   frame->depth.height = stored.intrinsics.height;
   frame->depth.depth_m.reserve(stored.depth_mm.size());
-  for (const std::uint16_t mm : stored.depth_mm) frame->depth.depth_m.push_back(mm * 0.001f);
+  for (const std::uint16_t mm : stored.depth_mm)
+    frame->depth.depth_m.push_back(DepthSampleMetres(mm));
   return ServiceStatus::Ok();
 }
 

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <set>
 
+#include "objects/observation_segment.h"
+
 namespace objmap {
 
 bool InventoryConfig::IsValid(std::string* why) const {
@@ -133,7 +135,7 @@ ObjectVisibility VisibilityIn(const std::vector<Eigen::Vector3f>& samples_W,
     const int u = static_cast<int>(u_f), v = static_cast<int>(v_f);
     const std::uint16_t measured_mm = depth_mm[static_cast<std::size_t>(v) * width + u];
     if (measured_mm == 0) continue;  // no depth: the view cannot tell whether it is there
-    const float measured_m = measured_mm * 0.001f;
+    const float measured_m = DepthSampleMetres(measured_mm);
     const float margin_m =
         config.occlusion_margin_m + config.occlusion_margin_per_m2 * measured_m * measured_m;
     // Depth well in front of the point: something hides it, unless that something lies within

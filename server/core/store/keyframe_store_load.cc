@@ -2,7 +2,6 @@
 // consistent snapshot while Commit goes on), images decoded afterwards, in parallel.
 
 #include <algorithm>
-#include <cmath>
 #include <cstring>
 #include <map>
 #include <thread>
